@@ -1,0 +1,13 @@
+#pragma once
+#include <cmath>
+#include <numbers>
+
+namespace seif {
+
+/// Wraps an angle to (-pi, pi]. Used for every heading and every bearing innovation.
+inline double wrapAngle(double a) {
+  a = std::remainder(a, 2.0 * std::numbers::pi);  // [-pi, pi]
+  return a <= -std::numbers::pi ? a + 2.0 * std::numbers::pi : a;
+}
+
+}  // namespace seif

@@ -1,0 +1,1 @@
+#include <seif/io/dataset.hpp>
