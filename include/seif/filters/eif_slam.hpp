@@ -1,0 +1,49 @@
+#pragma once
+// EIF-SLAM: the exact extended information filter with a dense information matrix H and
+// vector b (algorithm.md "The exact information filter"). Motion update in the closed
+// form of paper Lemma 3 on the full matrix, measurement update paper eq. (21-22), and the
+// mean recovered exactly by a Cholesky solve of H mu = b. Algebraically the EKF.
+#include <seif/filters/landmark_index.hpp>
+#include <seif/filters/slam_filter.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+namespace seif {
+
+class EifSlam final : public SlamFilter {
+ public:
+  EifSlam(const Pose2& initial_pose, const FilterConfig& config);
+
+  std::string name() const override { return "eif"; }
+  void predict(const VelocityControl& u) override;
+  void update(std::span<const Observation> observations) override;
+
+  Pose2 pose() const override;
+  Mat3 poseCovariance() const override;
+  const std::vector<int>& landmarkIds() const override { return index_.ids(); }
+  bool hasLandmark(int id) const override { return index_.find(id) >= 0; }
+  Vec2 landmark(int id) const override;
+  Mat2 landmarkCovariance(int id) const override;
+  FilterStats stats() const override;
+
+  Eigen::VectorXd mean() const override { return mu_; }
+  Eigen::MatrixXd covariance() const override;
+  Eigen::MatrixXd information() const override { return H_; }
+  const Eigen::VectorXd& informationVector() const { return b_; }
+
+ private:
+  int slotOf(int id) const;
+  void recoverMean();
+  const Eigen::LLT<Eigen::MatrixXd>& factor() const;
+
+  FilterConfig config_;
+  LandmarkIndex index_;
+  Eigen::MatrixXd H_;
+  Eigen::VectorXd b_;
+  Eigen::VectorXd mu_;
+  mutable Eigen::LLT<Eigen::MatrixXd> llt_;
+  mutable bool llt_valid_ = false;
+};
+
+}  // namespace seif

@@ -1,0 +1,43 @@
+#pragma once
+// EKF-SLAM with a dense covariance: the reference the SEIF is compared with (O(N^2) per
+// update). New landmarks are initialised through the inverse-model Jacobians, and all
+// observations of one instant are applied jointly at one linearisation point, so that the
+// EKF and the EIF give the same posterior to rounding (algorithm.md "Models", "EIF").
+#include <seif/filters/landmark_index.hpp>
+#include <seif/filters/slam_filter.hpp>
+
+#include <Eigen/Core>
+
+namespace seif {
+
+class EkfSlam final : public SlamFilter {
+ public:
+  EkfSlam(const Pose2& initial_pose, const FilterConfig& config);
+
+  std::string name() const override { return "ekf"; }
+  void predict(const VelocityControl& u) override;
+  void update(std::span<const Observation> observations) override;
+
+  Pose2 pose() const override;
+  Mat3 poseCovariance() const override { return sigma_.topLeftCorner<3, 3>(); }
+  const std::vector<int>& landmarkIds() const override { return index_.ids(); }
+  bool hasLandmark(int id) const override { return index_.find(id) >= 0; }
+  Vec2 landmark(int id) const override;
+  Mat2 landmarkCovariance(int id) const override;
+  FilterStats stats() const override;
+
+  Eigen::VectorXd mean() const override;
+  Eigen::MatrixXd covariance() const override { return sigma_; }
+  Eigen::MatrixXd information() const override;
+
+ private:
+  void addLandmark(const Observation& z);
+  int slotOf(int id) const;
+
+  FilterConfig config_;
+  LandmarkIndex index_;
+  Eigen::VectorXd mu_;     // heading kept unwrapped in the state; pose() wraps it
+  Eigen::MatrixXd sigma_;
+};
+
+}  // namespace seif

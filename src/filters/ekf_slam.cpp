@@ -1,0 +1,133 @@
+#include <seif/core/angles.hpp>
+#include <seif/core/errors.hpp>
+#include <seif/filters/ekf_slam.hpp>
+#include <seif/filters/information_ops.hpp>
+#include <seif/models/range_bearing.hpp>
+#include <seif/models/velocity_motion.hpp>
+
+#include <Eigen/Cholesky>
+#include <sstream>
+
+namespace seif {
+
+EkfSlam::EkfSlam(const Pose2& initial_pose, const FilterConfig& config)
+    : config_(config), mu_(initial_pose), sigma_(Mat3::Zero()) {
+  sigma_.diagonal() = config.initial_pose_sigma.cwiseAbs2();
+}
+
+int EkfSlam::slotOf(int id) const {
+  const int s = index_.find(id);
+  if (s < 0) throw std::out_of_range("ekf: landmark " + std::to_string(id) + " is not in the map");
+  return s;
+}
+
+Pose2 EkfSlam::pose() const {
+  Pose2 x = mu_.head<3>();
+  x.z() = wrapAngle(x.z());
+  return x;
+}
+
+Vec2 EkfSlam::landmark(int id) const {
+  return mu_.segment<2>(LandmarkIndex::stateIndex(slotOf(id)));
+}
+
+Mat2 EkfSlam::landmarkCovariance(int id) const {
+  const int i = LandmarkIndex::stateIndex(slotOf(id));
+  return sigma_.block<2, 2>(i, i);
+}
+
+Eigen::VectorXd EkfSlam::mean() const { return mu_; }
+
+Eigen::MatrixXd EkfSlam::information() const {
+  Eigen::LLT<Eigen::MatrixXd> llt(sigma_);
+  return llt.solve(Eigen::MatrixXd::Identity(sigma_.rows(), sigma_.cols()));
+}
+
+FilterStats EkfSlam::stats() const { return denseLinkStats(information()); }
+
+void EkfSlam::predict(const VelocityControl& u) {
+  Mat3 J_x;
+  const Pose2 x = mu_.head<3>();
+  const Vec3 delta = VelocityMotionModel::delta(x, u, &J_x);
+  const Mat3 U = VelocityMotionModel::processNoise(x, u, config_.noise.sigma_v, config_.noise.sigma_w);
+  const Mat3 G = Mat3::Identity() + J_x;
+  const Eigen::Index n = sigma_.rows();
+  // Sigma <- G Sigma G^T + S_x U S_x^T, G = I except the robot block.
+  sigma_.topRightCorner(3, n - 3) = (G * sigma_.topRightCorner(3, n - 3)).eval();
+  sigma_.bottomLeftCorner(n - 3, 3) = sigma_.topRightCorner(3, n - 3).transpose();
+  sigma_.topLeftCorner<3, 3>() = G * sigma_.topLeftCorner<3, 3>() * G.transpose() + U;
+  mu_.head<3>() += delta;
+}
+
+void EkfSlam::addLandmark(const Observation& z) {
+  // Inverse model y = g(x, z): Sigma_yy = Gx Sxx Gx^T + Gz Z Gz^T, Sigma_y* = Gx Sigma_x*.
+  Mat23 G_x;
+  Mat2 G_z;
+  const Vec2 y = RangeBearingModel::inverse(mu_.head<3>(), Vec2(z.range, z.bearing), &G_x, &G_z);
+  const Mat2 Z = RangeBearingModel::noise(config_.noise.sigma_range, config_.noise.sigma_bearing);
+  const Eigen::Index n = sigma_.rows();
+  index_.add(z.landmark);
+  mu_.conservativeResize(n + 2);
+  mu_.tail<2>() = y;
+  const Eigen::MatrixXd cross = G_x * sigma_.topRows<3>();  // 2 x n
+  sigma_.conservativeResize(n + 2, n + 2);
+  sigma_.bottomLeftCorner(2, n) = cross;
+  sigma_.topRightCorner(n, 2) = cross.transpose();
+  Mat2 S_yy = G_x * sigma_.topLeftCorner<3, 3>() * G_x.transpose() + G_z * Z * G_z.transpose();
+  sigma_.bottomRightCorner<2, 2>() = 0.5 * (S_yy + S_yy.transpose());
+}
+
+void EkfSlam::update(std::span<const Observation> observations) {
+  // A landmark's first observation initialises it (and carries no other information);
+  // all other observations form one joint update linearised at the prior mean.
+  std::vector<const Observation*> updates;
+  updates.reserve(observations.size());
+  for (const Observation& z : observations) {
+    if (index_.find(z.landmark) < 0) {
+      addLandmark(z);
+    } else {
+      updates.push_back(&z);
+    }
+  }
+  if (updates.empty()) return;
+
+  const Eigen::Index n = sigma_.rows();
+  const Eigen::Index m = 2 * static_cast<Eigen::Index>(updates.size());
+  const Mat2 Z = RangeBearingModel::noise(config_.noise.sigma_range, config_.noise.sigma_bearing);
+  Eigen::MatrixXd PJt(n, m);  // Sigma J^T, using J's sparsity
+  Eigen::VectorXd nu(m);
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(m, m);
+  std::vector<Mat23> Jx(updates.size());
+  std::vector<Mat2> Jy(updates.size());
+  std::vector<Eigen::Index> li(updates.size());
+  const Pose2 x = mu_.head<3>();
+  for (std::size_t k = 0; k < updates.size(); ++k) {
+    const Observation& z = *updates[k];
+    li[k] = LandmarkIndex::stateIndex(index_.find(z.landmark));
+    const Vec2 zhat = RangeBearingModel::predict(x, mu_.segment<2>(li[k]), &Jx[k], &Jy[k]);
+    nu.segment<2>(2 * static_cast<Eigen::Index>(k)) =
+        RangeBearingModel::innovation(Vec2(z.range, z.bearing), zhat);
+    PJt.middleCols<2>(2 * static_cast<Eigen::Index>(k)) =
+        sigma_.leftCols<3>() * Jx[k].transpose() + sigma_.middleCols<2>(li[k]) * Jy[k].transpose();
+  }
+  for (std::size_t k = 0; k < updates.size(); ++k) {
+    // S = J Sigma J^T + R, row block k = Jx_k (Sigma J^T)_x + Jy_k (Sigma J^T)_l
+    S.middleRows<2>(2 * static_cast<Eigen::Index>(k)) =
+        Jx[k] * PJt.topRows<3>() + Jy[k] * PJt.middleRows<2>(li[k]);
+    S.block<2, 2>(2 * static_cast<Eigen::Index>(k), 2 * static_cast<Eigen::Index>(k)) += Z;
+  }
+  S = (0.5 * (S + S.transpose())).eval();
+  Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success) {
+    std::ostringstream msg;
+    msg << "ekf: innovation covariance is not positive definite (landmark "
+        << updates.front()->landmark << ")";
+    throw NumericError(msg.str());
+  }
+  const Eigen::MatrixXd K = llt.solve(PJt.transpose()).transpose();  // n x m
+  mu_.noalias() += K * nu;
+  sigma_.noalias() -= K * PJt.transpose();
+  sigma_ = (0.5 * (sigma_ + sigma_.transpose())).eval();
+}
+
+}  // namespace seif
