@@ -73,10 +73,20 @@ struct Dataset {
 /// measurements come before the control that starts there. Measurements before the first
 /// odometry row are dropped and counted; those after the last row are applied with the
 /// last control.
+///
+/// Precisely: step times are the odometry stamps after the first and the measurement stamps
+/// (at or after the first odometry stamp); each step predicts with the control in force
+/// from the previous step's time (start_time for the first) up to its own time, then
+/// applies every measurement with exactly that stamp (in log order; Observation::landmark =
+/// subject). Steps with dt == 0 and no observation are not emitted, so the sum of all dt is
+/// the last step time minus start_time. start_time = first odometry stamp. With no odometry
+/// at all, every measurement is dropped as before_first_control and there are no steps.
+/// Throws DataError (naming log.source) if the odometry stamps go backwards.
 Dataset buildDataset(const RobotLog& log);
 
 /// The ground-truth pose at time t, interpolated linearly (heading along the shortest
-/// arc); clamps outside the recorded span. Requires a non-empty, time-sorted track.
+/// arc, result wrapped to (-pi, pi]); clamps outside the recorded span. Requires a
+/// non-empty, time-sorted track (throws std::invalid_argument when empty).
 Pose2 interpolatePose(const std::vector<TimedPose>& track, double t);
 
 }  // namespace seif
