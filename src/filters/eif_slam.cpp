@@ -65,7 +65,8 @@ void EifSlam::predict(const VelocityControl& u) {
   const Pose2 x = mu_.head<3>();
   const Vec3 delta = VelocityMotionModel::delta(x, u, &J_x);
   const Mat3 U = VelocityMotionModel::processNoise(x, u, config_.noise.sigma_v, config_.noise.sigma_w);
-  informationMotionUpdate(H_, b_, mu_, delta, J_x, U);
+  Eigen::MatrixXd workspace(6, H_.cols());
+  informationMotionUpdate(H_, b_, mu_, delta, J_x, U, workspace);
   llt_valid_ = false;
 }
 

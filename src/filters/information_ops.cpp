@@ -3,6 +3,7 @@
 #include <seif/filters/slam_filter.hpp>
 #include <seif/models/range_bearing.hpp>
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
 
@@ -10,26 +11,86 @@ namespace seif {
 
 void informationMotionUpdate(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
                              Eigen::Ref<Eigen::VectorXd> mu, const Vec3& delta,
-                             const Mat3& J_delta_x, const Mat3& U) {
+                             const Mat3& J_delta_x, const Mat3& U,
+                             Eigen::Ref<Eigen::MatrixXd> workspace) {
+  const Eigen::Index n = H.rows();
+  // The paper's b + (Hbar - H) mu + Hbar S_x delta equals Hbar mubar + (b - H mu), and is
+  // right only when mu = H^-1 b. The SEIF's amortised mean is not: the robot's row of the
+  // residual r = b - H mu (non-zero after a measurement update) must be carried through
+  // the motion as well, which adds  S_x (G_x^-T r_x - r_x) - Phi S_x C G_x^-T r_x.
+  // The robot is linked only to variables in this block, so r_x is exact here.
+  const Vec3 r_x = b.head<3>() - H.topRows<3>() * mu;
+  b.noalias() -= H * mu;
   // G_x = I + A_x; A_x has only a heading column, so G_x^-1 = I - A_x exactly.
   const Mat3 G_inv = Mat3::Identity() - J_delta_x;
-  const Eigen::MatrixXd H_old = H;  // (Hbar - H) mu needs the old matrix
   // Phi = G^-T H G^-1: G^-1 differs from I only in the robot block.
-  H.topRows<3>() = (G_inv.transpose() * H.topRows<3>()).eval();
-  H.leftCols<3>() = (H.leftCols<3>() * G_inv).eval();
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const Vec3 col = H.col(j).head<3>();
+    H.col(j).head<3>().noalias() = G_inv.transpose() * col;
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::RowVector3d row = H.row(i).head<3>();
+    H.row(i).head<3>().noalias() = row * G_inv;
+  }
   // kappa = Phi_{:,x} U (I + Phi_xx U)^-1 Phi_{x,:}
   const Mat3 Phi_xx = H.topLeftCorner<3, 3>();
   Mat3 C = U * (Mat3::Identity() + Phi_xx * U).partialPivLu().inverse();
   C = (0.5 * (C + C.transpose())).eval();
-  const Eigen::Matrix<double, 3, Eigen::Dynamic> Phi_x = H.topRows<3>();
-  H.noalias() -= Phi_x.transpose() * (C * Phi_x);
+  auto Phi_x = workspace.topLeftCorner(3, n);
+  auto C_Phi_x = workspace.block(3, 0, 3, n);
+  Phi_x = H.topRows<3>();
+  C_Phi_x.noalias() = C * Phi_x;
+  const Vec3 s_x = G_inv.transpose() * r_x;
+  b.head<3>() += s_x - r_x;
+  b.noalias() -= Phi_x.transpose() * (C * s_x);
+  H.noalias() -= Phi_x.transpose() * C_Phi_x;
   // Symmetric by construction up to rounding: restore it exactly.
-  H = (0.5 * (H + H.transpose())).eval();
-  // b <- b + (Hbar - H) mu + Hbar S_x delta   (the mean need not satisfy H mu = b here:
-  // the SEIF's amortised mean does not).
-  b.noalias() += (H - H_old) * mu;
-  b.noalias() += H.leftCols<3>() * delta;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    for (Eigen::Index i = j + 1; i < n; ++i) {
+      const double m = 0.5 * (H(i, j) + H(j, i));
+      H(i, j) = m;
+      H(j, i) = m;
+    }
+  }
   mu.head<3>() += delta;
+  b.noalias() += H * mu;
+}
+
+double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
+                           const Eigen::Ref<const Eigen::VectorXd>& mu, int drop) {
+  const Eigen::Index n = H.rows();
+  const Eigen::Index d = 2 * drop;        // size of Y0
+  const Eigen::Index y0 = n - d;          // first row of Y0
+  if (n > kMaxLocalDim || drop < 1 || y0 < 3) {
+    throw NumericError("sparsification: bad block layout (" + std::to_string(n) + " rows, " +
+                       std::to_string(drop) + " to deactivate)");
+  }
+  const LocalMatrix H0 = H;
+  // T1 = H0 S_Y0 (S_Y0^T H0 S_Y0)^-1 S_Y0^T H0
+  Eigen::LLT<LocalMatrix> llt_y0(H0.bottomRightCorner(d, d));
+  // T2 = H0 S_xY0 (S_xY0^T H0 S_xY0)^-1 S_xY0^T H0, with xY0 = rows {0..2} u {y0..n-1}
+  const Eigen::Index m = 3 + d;
+  LocalMatrix H0_cols(n, m);  // H0 S_xY0
+  H0_cols.leftCols(3) = H0.leftCols(3);
+  H0_cols.rightCols(d) = H0.rightCols(d);
+  LocalMatrix H0_xy0(m, m);  // S_xY0^T H0 S_xY0
+  H0_xy0.topRows(3) = H0_cols.topRows(3);
+  H0_xy0.bottomRows(d) = H0_cols.bottomRows(d);
+  Eigen::LLT<LocalMatrix> llt_xy0(H0_xy0);
+  // T3 = H S_x H_xx^-1 S_x^T H
+  Eigen::LLT<Mat3> llt_x(H0.topLeftCorner<3, 3>());
+  if (llt_y0.info() != Eigen::Success || llt_xy0.info() != Eigen::Success ||
+      llt_x.info() != Eigen::Success) {
+    throw NumericError("sparsification: an information block is not positive definite");
+  }
+  LocalMatrix change = H0_cols * llt_xy0.solve(H0_cols.transpose());
+  change.noalias() -= H0.rightCols(d) * llt_y0.solve(H0.bottomRows(d));
+  change.noalias() -= H0.leftCols(3) * llt_x.solve(H0.topRows(3));
+  change = (0.5 * (change + change.transpose())).eval();
+  H += change;
+  b.noalias() += change * mu;
+  const double scale = H0.cwiseAbs().maxCoeff();
+  return H.block(0, y0, 3, d).cwiseAbs().maxCoeff() / scale;
 }
 
 MeasurementInformation measurementInformation(const Pose2& x, const Vec2& y,

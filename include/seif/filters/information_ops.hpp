@@ -13,9 +13,33 @@ namespace seif {
 ///   H <- Phi - kappa,   b <- b + (Hbar - H) mu + Hbar S_x delta,   mu <- mu + S_x delta.
 /// (U^-1 + A)^-1 is evaluated as U (I + A U)^-1, so a singular U (the two-dimensional
 /// velocity noise) is fine. Exact when H holds every variable linked to the robot.
+/// The paper's b update assumes mu = H^-1 b; here the residual b - H mu of the robot's row
+/// is carried through the motion too, so the result is exact (for the model linearised at
+/// mu) whatever mean is supplied - the SEIF's amortised mean is not exact.
+/// `workspace` needs at least 6 rows and H.cols() columns; with it the update allocates
+/// nothing (the SEIF calls it on a small stack block every step).
 void informationMotionUpdate(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
                              Eigen::Ref<Eigen::VectorXd> mu, const Vec3& delta,
-                             const Mat3& J_delta_x, const Mat3& U);
+                             const Mat3& J_delta_x, const Mat3& U,
+                             Eigen::Ref<Eigen::MatrixXd> workspace);
+
+/// Largest block the SEIF gathers: the robot and up to kMaxLocalLandmarks landmarks.
+inline constexpr int kMaxLocalLandmarks = 40;
+inline constexpr int kMaxLocalDim = 3 + 2 * kMaxLocalLandmarks;
+using LocalMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor,
+                                  kMaxLocalDim, kMaxLocalDim>;
+using LocalVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxLocalDim, 1>;
+
+/// Sparsification, paper eq. (44-51) / algorithm.md §4, on the dense block of the robot and
+/// its active landmarks ordered [x (3), Y+ (2 each), Y0 (2 each)] with `drop` landmarks in
+/// Y0 (the last ones). H0 is this block (conditioning on the passive Y- = 0):
+///   Hs = H - H0 S_Y0 (S_Y0^T H0 S_Y0)^-1 S_Y0^T H0 + H0 S_xY0 (S_xY0^T H0 S_xY0)^-1 S_xY0^T H0
+///          - H S_x (S_x^T H S_x)^-1 S_x^T H,            bs = b + (Hs - H) mu.
+/// Returns the largest magnitude the formula left in the robot-Y0 blocks (zero up to
+/// rounding; the caller removes those links), relative to the largest entry of the block.
+/// At most kMaxLocalDim rows; allocates nothing. Throws NumericError if a block is singular.
+double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
+                           const Eigen::Ref<const Eigen::VectorXd>& mu, int drop);
 
 /// Information added by one range-bearing observation, paper eq. (21-22), ordered
 /// [robot (3), landmark (2)]:  dH = J^T Z^-1 J,  db = J^T Z^-1 (z - zhat + J mu),

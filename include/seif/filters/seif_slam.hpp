@@ -1,0 +1,139 @@
+#pragma once
+// The Sparse Extended Information Filter (Thrun et al. 2002; algorithm.md §1-4).
+// H and b live in a block-sparse store: per landmark its 2x2 diagonal block, its links to
+// other landmarks, and the robot's links to the active landmarks. One step touches only the
+// robot, the active landmarks and K relaxed landmarks, so its cost does not grow with the map:
+//   predict(u)  : motion update on the {robot, active} block (paper Lemma 3);
+//   update(z)   : mean recovery (amortised coordinate descent, eq. 42), measurement update
+//                 (Lemma 1, eq. 21-22), sparsification (eq. 44-51) when more than
+//                 max_active landmarks are active.
+#include <seif/filters/information_ops.hpp>
+#include <seif/filters/landmark_index.hpp>
+#include <seif/filters/slam_filter.hpp>
+
+#include <Eigen/SparseCore>
+#include <cstdint>
+#include <memory>
+#include <random>
+#include <string_view>
+
+namespace seif {
+
+struct SeifOptions {
+  enum class Mean { Amortized, Exact };
+  enum class Deactivate { Weakest, Oldest };
+
+  int max_active = 6;  ///< theta_x: landmarks linked to the robot after each step
+  int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
+  /// Amortized: constant-time coordinate descent. Exact: sparse Cholesky solve of H mu = b
+  /// after every update ("SEIF with exact mu" in the paper's table; not constant time).
+  Mean mean = Mean::Amortized;
+  /// Weakest: deactivate the landmarks with the weakest normalised link to the robot (the
+  /// paper). Oldest: those observed least recently.
+  Deactivate deactivate = Deactivate::Weakest;
+  std::uint64_t seed = 1;  ///< for the random choice of relaxed landmarks
+
+  static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
+  static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
+};
+
+class SeifSlam final : public SlamFilter {
+ public:
+  SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const SeifOptions& options = {});
+  ~SeifSlam() override;
+
+  std::string name() const override { return "seif"; }
+  void predict(const VelocityControl& u) override;
+  void update(std::span<const Observation> observations) override;
+
+  Pose2 pose() const override;
+  Mat3 poseCovariance() const override;
+  const std::vector<int>& landmarkIds() const override { return index_.ids(); }
+  bool hasLandmark(int id) const override { return index_.find(id) >= 0; }
+  Vec2 landmark(int id) const override;
+  Mat2 landmarkCovariance(int id) const override;
+  FilterStats stats() const override;
+
+  Eigen::VectorXd mean() const override;
+  Eigen::MatrixXd covariance() const override;
+  Eigen::MatrixXd information() const override;
+
+  // The paper's four steps, public so that each can be run and checked alone.
+  // predict(u) = motionUpdate(u); update(z) = recoverMean(); measurementUpdate(z); sparsify()
+  // (with the exact mean: measurementUpdate(z); recoverExactMean(); sparsify()).
+  void motionUpdate(const VelocityControl& u);              ///< §1, Lemma 3
+  void recoverMean();                                      ///< §2, amortised, eq. (42)
+  void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
+  void measurementUpdate(std::span<const Observation> z);  ///< §3, eq. (21-22)
+  void sparsify();                                         ///< §4, eq. (44-51)
+
+  const SeifOptions& options() const { return options_; }
+  /// H as a sparse matrix and b, in the state order [x, y, th, landmarks...].
+  Eigen::SparseMatrix<double> sparseInformation() const;
+  Eigen::VectorXd informationVector() const;
+  /// The exact mean H^-1 b (sparse Cholesky), without changing the filter.
+  Eigen::VectorXd exactMean() const;
+  /// Runs `sweeps` full Gauss-Seidel sweeps of the mean over every variable.
+  void relaxMean(int sweeps);
+  /// Ids of the active landmarks (linked to the robot).
+  std::vector<int> activeLandmarks() const;
+  /// Largest relative magnitude the sparsification formula left in a removed robot link
+  /// during the last step (zero up to rounding, by paper eq. 44-51); 0 when none removed.
+  double lastSparsificationResidual() const { return last_sparsification_residual_; }
+
+ private:
+  struct Link {
+    int slot;
+    Mat2 H;  // H_{this, other}
+  };
+  struct RobotLink {
+    int slot;
+    Mat32 H;  // H_{x, landmark}
+    long last_seen;
+  };
+  struct Node {
+    Mat2 H = Mat2::Zero();
+    Vec2 b = Vec2::Zero();
+    Vec2 mu = Vec2::Zero();
+    int active = -1;  // position in robot_links_, or -1 when passive
+    std::vector<Link> links;
+  };
+
+  int slotOf(int id) const;
+  Mat2* findLink(int a, int c);
+  void addToLink(int a, int c, const Mat2& H_ac);
+  void relaxRobot();
+  void relaxLandmark(int slot);
+  /// Gathers H, b, mu of the robot and the active landmarks listed in `order`
+  /// (landmark slots) into the local buffers, and scatters them back.
+  void gather(const std::vector<int>& order);
+  void scatter(const std::vector<int>& order);
+  void removeRobotLink(int slot);
+  void invalidateFactor();
+
+  FilterConfig config_;
+  SeifOptions options_;
+  LandmarkIndex index_;
+  Mat3 H_xx_;
+  Vec3 b_x_;
+  Vec3 mu_x_;
+  std::vector<RobotLink> robot_links_;
+  std::vector<Node> nodes_;
+  std::mt19937_64 rng_;
+  long step_ = 0;
+  std::size_t blocks_touched_ = 0;
+  double last_sparsification_residual_ = 0.0;
+
+  // Work buffers, reused every step (no allocation in the steady state).
+  LocalMatrix local_H_;
+  LocalVector local_b_;
+  LocalVector local_mu_;
+  Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxLocalDim> workspace_;
+  std::vector<int> order_;
+  std::vector<std::pair<double, int>> ranking_;
+
+  struct Factor;  // cached sparse Cholesky factor for exact means and covariances
+  mutable std::unique_ptr<Factor> factor_;
+};
+
+}  // namespace seif

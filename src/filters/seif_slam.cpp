@@ -1,0 +1,404 @@
+#include <seif/core/angles.hpp>
+#include <seif/core/errors.hpp>
+#include <seif/filters/seif_slam.hpp>
+#include <seif/models/range_bearing.hpp>
+#include <seif/models/velocity_motion.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <sstream>
+
+namespace seif {
+
+SeifOptions::Mean SeifOptions::parseMean(std::string_view s) {
+  if (s == "amortized") return Mean::Amortized;
+  if (s == "exact") return Mean::Exact;
+  throw std::invalid_argument("unknown mean recovery '" + std::string(s) +
+                              "' (expected amortized or exact)");
+}
+
+SeifOptions::Deactivate SeifOptions::parseDeactivate(std::string_view s) {
+  if (s == "weakest") return Deactivate::Weakest;
+  if (s == "oldest") return Deactivate::Oldest;
+  throw std::invalid_argument("unknown deactivation rule '" + std::string(s) +
+                              "' (expected weakest or oldest)");
+}
+
+struct SeifSlam::Factor {
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt;
+};
+
+SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const SeifOptions& options)
+    : config_(config),
+      options_(options),
+      H_xx_(config.initial_pose_sigma.cwiseAbs2().cwiseInverse().asDiagonal()),
+      mu_x_(initial_pose),
+      rng_(options.seed) {
+  if (options.max_active < 1 || options.max_active >= kMaxLocalLandmarks) {
+    throw std::invalid_argument("seif: the number of active landmarks must be in 1.." +
+                                std::to_string(kMaxLocalLandmarks - 1));
+  }
+  if (options.relax < 0) throw std::invalid_argument("seif: --relax must be >= 0");
+  b_x_ = H_xx_ * mu_x_;
+  robot_links_.reserve(kMaxLocalLandmarks + 1);
+  order_.reserve(kMaxLocalLandmarks + 1);
+  ranking_.reserve(kMaxLocalLandmarks + 1);
+}
+
+SeifSlam::~SeifSlam() = default;
+
+int SeifSlam::slotOf(int id) const {
+  const int s = index_.find(id);
+  if (s < 0) throw std::out_of_range("seif: landmark " + std::to_string(id) + " is not in the map");
+  return s;
+}
+
+void SeifSlam::invalidateFactor() { factor_.reset(); }
+
+// ---------------------------------------------------------------- block store ----------
+
+Mat2* SeifSlam::findLink(int a, int c) {
+  for (Link& l : nodes_[static_cast<std::size_t>(a)].links) {
+    if (l.slot == c) return &l.H;
+  }
+  return nullptr;
+}
+
+void SeifSlam::addToLink(int a, int c, const Mat2& H_ac) {
+  if (Mat2* h = findLink(a, c)) {
+    *h += H_ac;
+    *findLink(c, a) += H_ac.transpose();
+    return;
+  }
+  nodes_[static_cast<std::size_t>(a)].links.push_back({c, H_ac});
+  nodes_[static_cast<std::size_t>(c)].links.push_back({a, H_ac.transpose()});
+}
+
+void SeifSlam::gather(const std::vector<int>& order) {
+  const int k = static_cast<int>(order.size());
+  const int n = 3 + 2 * k;
+  local_H_.setZero(n, n);
+  local_b_.resize(n);
+  local_mu_.resize(n);
+  local_H_.topLeftCorner<3, 3>() = H_xx_;
+  local_b_.head<3>() = b_x_;
+  local_mu_.head<3>() = mu_x_;
+  for (int i = 0; i < k; ++i) {
+    Node& node = nodes_[static_cast<std::size_t>(order[static_cast<std::size_t>(i)])];
+    const int r = 3 + 2 * i;
+    local_H_.block<2, 2>(r, r) = node.H;
+    local_b_.segment<2>(r) = node.b;
+    local_mu_.segment<2>(r) = node.mu;
+    if (node.active >= 0) {
+      const Mat32& H_xl = robot_links_[static_cast<std::size_t>(node.active)].H;
+      local_H_.block<3, 2>(0, r) = H_xl;
+      local_H_.block<2, 3>(r, 0) = H_xl.transpose();
+    }
+    for (int j = i + 1; j < k; ++j) {
+      if (const Mat2* h = findLink(order[static_cast<std::size_t>(i)], order[static_cast<std::size_t>(j)])) {
+        const int c = 3 + 2 * j;
+        local_H_.block<2, 2>(r, c) = *h;
+        local_H_.block<2, 2>(c, r) = h->transpose();
+      }
+    }
+  }
+  blocks_touched_ += static_cast<std::size_t>((k + 1) * (k + 1));
+}
+
+void SeifSlam::scatter(const std::vector<int>& order) {
+  const int k = static_cast<int>(order.size());
+  H_xx_ = local_H_.topLeftCorner<3, 3>();
+  b_x_ = local_b_.head<3>();
+  mu_x_ = local_mu_.head<3>();
+  for (int i = 0; i < k; ++i) {
+    const int a = order[static_cast<std::size_t>(i)];
+    Node& node = nodes_[static_cast<std::size_t>(a)];
+    const int r = 3 + 2 * i;
+    node.H = local_H_.block<2, 2>(r, r);
+    node.b = local_b_.segment<2>(r);
+    node.mu = local_mu_.segment<2>(r);
+    if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
+    for (int j = i + 1; j < k; ++j) {
+      const int c = order[static_cast<std::size_t>(j)];
+      const Mat2 block = local_H_.block<2, 2>(r, 3 + 2 * j);
+      if (Mat2* h = findLink(a, c)) {
+        *h = block;
+        *findLink(c, a) = block.transpose();
+      } else if (block.cwiseAbs().maxCoeff() > 0.0) {
+        addToLink(a, c, block);  // motion creates links among the active landmarks (paper fig. 4)
+      }
+    }
+  }
+  blocks_touched_ += static_cast<std::size_t>((k + 1) * (k + 1));
+}
+
+void SeifSlam::removeRobotLink(int slot) {
+  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  const std::size_t pos = static_cast<std::size_t>(node.active);
+  node.active = -1;
+  if (pos + 1 != robot_links_.size()) {
+    robot_links_[pos] = robot_links_.back();
+    nodes_[static_cast<std::size_t>(robot_links_[pos].slot)].active = static_cast<int>(pos);
+  }
+  robot_links_.pop_back();
+}
+
+// ---------------------------------------------------------------- the four steps -------
+
+void SeifSlam::predict(const VelocityControl& u) { motionUpdate(u); }
+
+void SeifSlam::motionUpdate(const VelocityControl& u) {
+  ++step_;
+  blocks_touched_ = 0;
+  last_sparsification_residual_ = 0.0;
+  Mat3 J_x;
+  const Vec3 delta = VelocityMotionModel::delta(mu_x_, u, &J_x);
+  const Mat3 U = VelocityMotionModel::processNoise(mu_x_, u, config_.noise.sigma_v, config_.noise.sigma_w);
+  // §1: Lemma 3 on the {robot, active} block, the only part of H that motion changes.
+  order_.clear();
+  for (const RobotLink& l : robot_links_) order_.push_back(l.slot);
+  gather(order_);
+  const Eigen::Index n = local_H_.rows();
+  workspace_.resize(6, n);
+  informationMotionUpdate(local_H_, local_b_, local_mu_, delta, J_x, U, workspace_);
+  scatter(order_);
+  invalidateFactor();
+}
+
+void SeifSlam::relaxRobot() {
+  // eq. (42): mu_x = H_xx^-1 (b_x - sum_l H_xl mu_l)
+  Vec3 rhs = b_x_;
+  for (const RobotLink& l : robot_links_) rhs.noalias() -= l.H * nodes_[static_cast<std::size_t>(l.slot)].mu;
+  Eigen::LLT<Mat3> llt(H_xx_);
+  if (llt.info() != Eigen::Success) {
+    throw NumericError("seif: robot information block is not positive definite at step " +
+                       std::to_string(step_));
+  }
+  mu_x_ = llt.solve(rhs);
+  blocks_touched_ += 1 + robot_links_.size();
+}
+
+void SeifSlam::relaxLandmark(int slot) {
+  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  Vec2 rhs = node.b;
+  for (const Link& l : node.links) rhs.noalias() -= l.H * nodes_[static_cast<std::size_t>(l.slot)].mu;
+  if (node.active >= 0) {
+    rhs.noalias() -= robot_links_[static_cast<std::size_t>(node.active)].H.transpose() * mu_x_;
+  }
+  Eigen::LLT<Mat2> llt(node.H);
+  if (llt.info() != Eigen::Success) {
+    std::ostringstream msg;
+    msg << "seif: information of landmark " << index_.ids()[static_cast<std::size_t>(slot)]
+        << " is not positive definite at step " << step_;
+    throw NumericError(msg.str());
+  }
+  node.mu = llt.solve(rhs);
+  blocks_touched_ += 1 + node.links.size() + (node.active >= 0 ? 1 : 0);
+}
+
+void SeifSlam::recoverMean() {
+  // §2: one block Gauss-Seidel pass over the active landmarks, the robot and K random others.
+  for (const RobotLink& l : robot_links_) relaxLandmark(l.slot);
+  relaxRobot();
+  if (!nodes_.empty()) {
+    std::uniform_int_distribution<int> pick(0, static_cast<int>(nodes_.size()) - 1);
+    for (int k = 0; k < options_.relax; ++k) relaxLandmark(pick(rng_));
+  }
+}
+
+void SeifSlam::relaxMean(int sweeps) {
+  for (int s = 0; s < sweeps; ++s) {
+    relaxRobot();
+    for (int i = 0; i < static_cast<int>(nodes_.size()); ++i) relaxLandmark(i);
+  }
+}
+
+void SeifSlam::measurementUpdate(std::span<const Observation> observations) {
+  invalidateFactor();
+  // §3, paper eq. (21-22): every observation linearised at the current mean.
+  const Mat2 Z_inv =
+      RangeBearingModel::noise(config_.noise.sigma_range, config_.noise.sigma_bearing).inverse();
+  for (const Observation& z : observations) {
+    int slot = index_.find(z.landmark);
+    if (slot < 0) {  // a new landmark: no information yet, mean from the inverse model
+      slot = index_.add(z.landmark);
+      nodes_.emplace_back();
+      nodes_.back().mu = RangeBearingModel::inverse(mu_x_, Vec2(z.range, z.bearing));
+    }
+    Node& node = nodes_[static_cast<std::size_t>(slot)];
+    const MeasurementInformation info = measurementInformation(mu_x_, node.mu, z, Z_inv);
+    H_xx_ += info.H.topLeftCorner<3, 3>();
+    b_x_ += info.b.head<3>();
+    node.H += info.H.bottomRightCorner<2, 2>();
+    node.b += info.b.tail<2>();
+    if (node.active < 0) {  // observing a passive landmark activates it
+      node.active = static_cast<int>(robot_links_.size());
+      robot_links_.push_back({slot, Mat32::Zero(), step_});
+    }
+    RobotLink& link = robot_links_[static_cast<std::size_t>(node.active)];
+    link.H += info.H.topRightCorner<3, 2>();
+    link.last_seen = step_;
+    blocks_touched_ += 3;
+    // A batch larger than the local block would allow is sparsified as it comes.
+    if (static_cast<int>(robot_links_.size()) >= kMaxLocalLandmarks) sparsify();
+  }
+}
+
+void SeifSlam::sparsify() {
+  // §4, paper eq. (44-51): deactivate the surplus Y0, keep Y+.
+  const int k = static_cast<int>(robot_links_.size());
+  const int drop = k - options_.max_active;
+  if (drop <= 0) return;
+  ranking_.clear();
+  for (const RobotLink& l : robot_links_) {
+    double score;
+    if (options_.deactivate == SeifOptions::Deactivate::Oldest) {
+      score = static_cast<double>(l.last_seen);
+    } else {  // strength of the link on the normalised information matrix
+      const Node& node = nodes_[static_cast<std::size_t>(l.slot)];
+      const Vec3 dx = H_xx_.diagonal().cwiseSqrt().cwiseInverse();
+      const Vec2 dl = node.H.diagonal().cwiseSqrt().cwiseInverse();
+      score = (dx.asDiagonal() * l.H * dl.asDiagonal()).norm();
+    }
+    ranking_.emplace_back(score, l.slot);
+  }
+  invalidateFactor();
+  std::sort(ranking_.begin(), ranking_.end());  // weakest (or oldest) first
+  order_.clear();
+  for (int i = drop; i < k; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y+
+  for (int i = 0; i < drop; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y0
+  gather(order_);
+  const double residual = sparsifyInformation(local_H_, local_b_, local_mu_, drop);
+  last_sparsification_residual_ = std::max(last_sparsification_residual_, residual);
+  const Eigen::Index y0 = local_H_.rows() - 2 * drop;
+  local_H_.block(0, y0, 3, 2 * drop).setZero();
+  local_H_.block(y0, 0, 2 * drop, 3).setZero();
+  scatter(order_);
+  for (int i = 0; i < drop; ++i) removeRobotLink(ranking_[static_cast<std::size_t>(i)].second);
+}
+
+void SeifSlam::update(std::span<const Observation> observations) {
+  if (options_.mean == SeifOptions::Mean::Amortized) {
+    recoverMean();
+    measurementUpdate(observations);
+  } else {
+    measurementUpdate(observations);
+    recoverExactMean();  // sparsification then keeps this mean exactly
+  }
+  sparsify();
+}
+
+// ---------------------------------------------------------------- reading out ---------
+
+Eigen::SparseMatrix<double> SeifSlam::sparseInformation() const {
+  const int n = 3 + 2 * index_.size();
+  std::vector<Eigen::Triplet<double>> t;
+  auto addBlock = [&t](int r, int c, const auto& B) {
+    for (int i = 0; i < B.rows(); ++i)
+      for (int j = 0; j < B.cols(); ++j) t.emplace_back(r + i, c + j, B(i, j));
+  };
+  addBlock(0, 0, H_xx_);
+  for (const RobotLink& l : robot_links_) {
+    const int c = LandmarkIndex::stateIndex(l.slot);
+    addBlock(0, c, l.H);
+    addBlock(c, 0, Mat23(l.H.transpose()));
+  }
+  for (int s = 0; s < static_cast<int>(nodes_.size()); ++s) {
+    const Node& node = nodes_[static_cast<std::size_t>(s)];
+    const int r = LandmarkIndex::stateIndex(s);
+    addBlock(r, r, node.H);
+    for (const Link& l : node.links) addBlock(r, LandmarkIndex::stateIndex(l.slot), l.H);
+  }
+  Eigen::SparseMatrix<double> H(n, n);
+  H.setFromTriplets(t.begin(), t.end());
+  return H;
+}
+
+Eigen::VectorXd SeifSlam::informationVector() const {
+  Eigen::VectorXd b(3 + 2 * index_.size());
+  b.head<3>() = b_x_;
+  for (int s = 0; s < index_.size(); ++s) b.segment<2>(LandmarkIndex::stateIndex(s)) = nodes_[static_cast<std::size_t>(s)].b;
+  return b;
+}
+
+Eigen::VectorXd SeifSlam::mean() const {
+  Eigen::VectorXd mu(3 + 2 * index_.size());
+  mu.head<3>() = mu_x_;
+  for (int s = 0; s < index_.size(); ++s) mu.segment<2>(LandmarkIndex::stateIndex(s)) = nodes_[static_cast<std::size_t>(s)].mu;
+  return mu;
+}
+
+Eigen::VectorXd SeifSlam::exactMean() const {
+  if (!factor_) {
+    factor_ = std::make_unique<Factor>();
+    factor_->llt.compute(sparseInformation());
+  }
+  if (factor_->llt.info() != Eigen::Success) {
+    factor_.reset();
+    throw NumericError("seif: the information matrix is not positive definite at step " +
+                       std::to_string(step_));
+  }
+  return factor_->llt.solve(informationVector());
+}
+
+void SeifSlam::recoverExactMean() {
+  const Eigen::VectorXd mu = exactMean();
+  mu_x_ = mu.head<3>();
+  for (int s = 0; s < index_.size(); ++s) nodes_[static_cast<std::size_t>(s)].mu = mu.segment<2>(LandmarkIndex::stateIndex(s));
+}
+
+Eigen::MatrixXd SeifSlam::information() const { return Eigen::MatrixXd(sparseInformation()); }
+
+Eigen::MatrixXd SeifSlam::covariance() const {
+  const Eigen::MatrixXd H = information();
+  Eigen::LLT<Eigen::MatrixXd> llt(H);
+  if (llt.info() != Eigen::Success) throw NumericError("seif: information matrix is not positive definite");
+  return llt.solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
+}
+
+Pose2 SeifSlam::pose() const {
+  Pose2 x = mu_x_;
+  x.z() = wrapAngle(x.z());
+  return x;
+}
+
+Vec2 SeifSlam::landmark(int id) const { return nodes_[static_cast<std::size_t>(slotOf(id))].mu; }
+
+Mat3 SeifSlam::poseCovariance() const {
+  exactMean();  // builds the factor
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(3 + 2 * index_.size(), 3);
+  E.topRows<3>().setIdentity();
+  return factor_->llt.solve(E).topRows<3>();
+}
+
+Mat2 SeifSlam::landmarkCovariance(int id) const {
+  const int i = LandmarkIndex::stateIndex(slotOf(id));
+  exactMean();
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(3 + 2 * index_.size(), 2);
+  E.middleRows<2>(i).setIdentity();
+  return factor_->llt.solve(E).middleRows<2>(i);
+}
+
+std::vector<int> SeifSlam::activeLandmarks() const {
+  std::vector<int> ids;
+  for (const RobotLink& l : robot_links_) ids.push_back(index_.ids()[static_cast<std::size_t>(l.slot)]);
+  return ids;
+}
+
+FilterStats SeifSlam::stats() const {
+  FilterStats s;
+  s.landmarks = nodes_.size();
+  s.robot_links = robot_links_.size();
+  std::size_t half_links = 0;
+  for (const Node& node : nodes_) {
+    half_links += node.links.size();
+    s.max_landmark_links = std::max(s.max_landmark_links, node.links.size() + (node.active >= 0 ? 1 : 0));
+  }
+  s.links = s.robot_links + half_links / 2;
+  s.blocks_touched = blocks_touched_;
+  return s;
+}
+
+}  // namespace seif

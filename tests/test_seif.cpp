@@ -1,0 +1,232 @@
+// The SEIF: exact where the paper is exact, the sparsification's guarantees, invariants
+// after every step, and convergence of the amortised mean.
+#include "scenario.hpp"
+
+#include <seif/filters/eif_slam.hpp>
+#include <seif/filters/ekf_slam.hpp>
+#include <seif/filters/information_ops.hpp>
+#include <seif/filters/seif_slam.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace {
+
+using namespace seif;
+
+double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return (a - b).norm() / std::max(1e-300, b.norm());
+}
+
+FilterConfig configFor(const test::Scenario& s) {
+  FilterConfig c;
+  c.noise = s.noise;
+  return c;
+}
+
+double landmarkRmse(const SlamFilter& f, const test::Scenario& s) {
+  double sum = 0;
+  for (int id : f.landmarkIds()) {
+    sum += (f.landmark(id) - s.landmarks[static_cast<std::size_t>(id - 100)]).squaredNorm();
+  }
+  return std::sqrt(sum / static_cast<double>(f.landmarkIds().size()));
+}
+
+}  // namespace
+
+TEST(Seif, WithoutSparsificationAndExactMeanItIsTheEif) {
+  for (std::uint64_t seed : {1u, 4u}) {
+    const test::Scenario s = test::makeScenario(seed, 25, 200);
+    SeifOptions o;
+    o.max_active = kMaxLocalLandmarks - 1;  // larger than the map: never sparsifies
+    o.mean = SeifOptions::Mean::Exact;
+    SeifSlam seif(s.start, configFor(s), o);
+    EifSlam eif(s.start, configFor(s));
+    double worst_mean = 0, worst_info = 0, worst_b = 0;
+    for (const Step& step : s.steps) {
+      seif.step(step.u, step.observations);
+      eif.step(step.u, step.observations);
+      ASSERT_EQ(seif.landmarkIds(), eif.landmarkIds());
+      worst_mean = std::max(worst_mean, relDiff(seif.mean(), eif.mean()));
+      worst_info = std::max(worst_info, relDiff(seif.information(), eif.information()));
+      worst_b = std::max(worst_b, relDiff(seif.informationVector(), eif.informationVector()));
+    }
+    EXPECT_GT(seif.landmarkIds().size(), 20u);
+    EXPECT_LT(worst_mean, 1e-9) << "seed " << seed;
+    EXPECT_LT(worst_info, 1e-9) << "seed " << seed;
+    EXPECT_LT(worst_b, 1e-9) << "seed " << seed;
+  }
+}
+
+TEST(Sparsification, ZeroesTheRobotLinksAndKeepsTheMeanOnRandomBlocks) {
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> n01;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int keep = 1 + trial % 6, drop = 1 + trial % 3;
+    const int n = 3 + 2 * (keep + drop);
+    Eigen::MatrixXd A(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) A(i, j) = n01(rng);
+    Eigen::MatrixXd H = A * A.transpose() + n * Eigen::MatrixXd::Identity(n, n);
+    Eigen::VectorXd b(n);
+    for (int i = 0; i < n; ++i) b(i) = n01(rng);
+    const Eigen::VectorXd mu = H.llt().solve(b);
+    Eigen::MatrixXd Hs = H;
+    Eigen::VectorXd bs = b;
+    const double residual = sparsifyInformation(Hs, bs, mu, drop);
+    EXPECT_LT(residual, 1e-12);
+    EXPECT_LT(Hs.block(0, n - 2 * drop, 3, 2 * drop).cwiseAbs().maxCoeff(), 1e-12 * H.cwiseAbs().maxCoeff());
+    Eigen::LLT<Eigen::MatrixXd> llt(Hs);
+    ASSERT_EQ(llt.info(), Eigen::Success) << "sparsified H is not positive definite";
+    EXPECT_LT(relDiff(llt.solve(bs), mu), 1e-9);
+    EXPECT_LT((Hs - Hs.transpose()).cwiseAbs().maxCoeff(), 1e-12 * H.cwiseAbs().maxCoeff());
+  }
+}
+
+TEST(Seif, InvariantsHoldAfterEveryStepOfALongRun) {
+  const test::Scenario s = test::makeScenario(8, 60, 600);
+  for (auto rule : {SeifOptions::Deactivate::Weakest, SeifOptions::Deactivate::Oldest}) {
+    SeifOptions o;
+    o.deactivate = rule;
+    SeifSlam seif(s.start, configFor(s), o);
+    int k = 0;
+    for (const Step& step : s.steps) {
+      seif.step(step.u, step.observations);
+      const FilterStats st = seif.stats();
+      ASSERT_LE(st.robot_links, static_cast<std::size_t>(o.max_active)) << "step " << k;
+      ASSERT_LT(seif.lastSparsificationResidual(), 1e-9) << "step " << k;
+      const Eigen::MatrixXd H = seif.information();
+      ASSERT_LE((H - H.transpose()).cwiseAbs().maxCoeff(), 1e-12 * H.cwiseAbs().maxCoeff()) << "step " << k;
+      Eigen::LLT<Eigen::MatrixXd> llt(H);
+      ASSERT_EQ(llt.info(), Eigen::Success) << "H not positive definite at step " << k;
+      ++k;
+    }
+    EXPECT_GT(seif.landmarkIds().size(), 50u);
+  }
+}
+
+TEST(Seif, SparsificationInsideTheFilterKeepsTheMeanAndZeroesTheLinks) {
+  // The four steps run one by one: measurement update, exact mean, then sparsification,
+  // whose result must have the same H^-1 b and no robot link beyond theta_x.
+  const test::Scenario s = test::makeScenario(12, 40, 200);
+  SeifOptions o;
+  o.max_active = 3;
+  SeifSlam seif(s.start, configFor(s), o);
+  int sparsified = 0;
+  for (const Step& step : s.steps) {
+    seif.motionUpdate(step.u);
+    seif.recoverMean();
+    seif.measurementUpdate(step.observations);
+    seif.recoverExactMean();
+    const Eigen::VectorXd before = seif.exactMean();
+    const std::size_t active = seif.activeLandmarks().size();
+    seif.sparsify();
+    EXPECT_LE(seif.activeLandmarks().size(), 3u);
+    EXPECT_LT(relDiff(seif.exactMean(), before), 1e-9);
+    EXPECT_LT(seif.lastSparsificationResidual(), 1e-9);
+    if (active > 3) {
+      ++sparsified;
+      // the removed links are exactly zero in H
+      const Eigen::MatrixXd H = seif.information();
+      std::size_t robot_links = 0;
+      for (int l = 0; l < static_cast<int>(seif.landmarkIds().size()); ++l) {
+        if (H.block(0, 3 + 2 * l, 3, 2).cwiseAbs().maxCoeff() > 0.0) ++robot_links;
+      }
+      EXPECT_EQ(robot_links, seif.activeLandmarks().size());
+    }
+  }
+  EXPECT_GT(sparsified, 50);
+}
+
+TEST(Seif, AmortizedMeanConvergesToTheExactMean) {
+  const test::Scenario s = test::makeScenario(9, 40, 300);
+  SeifSlam seif(s.start, configFor(s));
+  for (const Step& step : s.steps) seif.step(step.u, step.observations);
+  const Eigen::VectorXd exact = seif.exactMean();
+  const double before = relDiff(seif.mean(), exact);
+  seif.relaxMean(20000);
+  const double after = relDiff(seif.mean(), exact);
+  EXPECT_LT(after, 1e-9) << "before relaxation: " << before;
+  EXPECT_LT(after, before);
+}
+
+TEST(Seif, AccuracyIsCloseToTheEkf) {
+  double ekf_sum = 0, seif_sum = 0, exact_sum = 0;
+  for (std::uint64_t seed = 20; seed < 26; ++seed) {
+    const test::Scenario s = test::makeScenario(seed, 40, 400);
+    EkfSlam ekf(s.start, configFor(s));
+    SeifSlam seif(s.start, configFor(s));
+    SeifOptions exact_options;
+    exact_options.mean = SeifOptions::Mean::Exact;
+    SeifSlam seif_exact(s.start, configFor(s), exact_options);
+    for (const Step& step : s.steps) {
+      ekf.step(step.u, step.observations);
+      seif.step(step.u, step.observations);
+      seif_exact.step(step.u, step.observations);
+    }
+    ekf_sum += landmarkRmse(ekf, s);
+    seif_sum += landmarkRmse(seif, s);
+    exact_sum += landmarkRmse(seif_exact, s);
+  }
+  EXPECT_LT(exact_sum, 1.5 * ekf_sum) << "ekf " << ekf_sum << " seif(exact mean) " << exact_sum;
+  EXPECT_LT(seif_sum, 2.0 * ekf_sum) << "ekf " << ekf_sum << " seif " << seif_sum;
+}
+
+TEST(Seif, OptionsAreValidated) {
+  SeifOptions o;
+  o.max_active = 0;
+  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), std::invalid_argument);
+  o.max_active = 6;
+  o.relax = -1;
+  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), std::invalid_argument);
+  EXPECT_EQ(SeifOptions::parseMean("exact"), SeifOptions::Mean::Exact);
+  EXPECT_THROW(SeifOptions::parseDeactivate("random"), std::invalid_argument);
+}
+
+TEST(InformationMotionUpdate, IsTheLinearisedPredictionForAnyLinearisationPoint) {
+  // State s ~ N(H^-1 b, H^-1); motion s' = s + S_x (delta + A (s_x - mu_x)) + S_x w, w ~ N(0, U),
+  // linearised at an arbitrary mu (not the mean). The information update must give the
+  // moments of s' exactly: Sigma' = G Sigma G^T + S_x U S_x^T, mean' = mean + S_x(delta + A(mean_x - mu_x)).
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n01;
+  for (int trial = 0; trial < 50; ++trial) {
+    const int n = 3 + 2 * (1 + trial % 6);
+    Eigen::MatrixXd M(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) M(i, j) = n01(rng);
+    Eigen::MatrixXd H = M * M.transpose() + Eigen::MatrixXd::Identity(n, n);
+    Eigen::VectorXd b(n), mu(n);
+    for (int i = 0; i < n; ++i) {
+      b(i) = n01(rng);
+      mu(i) = n01(rng);
+    }
+    Mat3 A = Mat3::Zero();
+    A(0, 2) = n01(rng);
+    A(1, 2) = n01(rng);
+    const Vec3 delta(n01(rng), n01(rng), n01(rng));
+    Eigen::Matrix<double, 3, 2> V;
+    V << n01(rng), n01(rng), n01(rng), n01(rng), 0, n01(rng);
+    const Mat3 U = V * V.transpose();  // rank 2, like the velocity model's noise
+    // Expected, in moments.
+    const Eigen::MatrixXd Sigma = H.inverse();
+    const Eigen::VectorXd mean = Sigma * b;
+    Eigen::MatrixXd G = Eigen::MatrixXd::Identity(n, n);
+    G.topLeftCorner<3, 3>() += A;
+    Eigen::MatrixXd Sigma_next = G * Sigma * G.transpose();
+    Sigma_next.topLeftCorner<3, 3>() += U;
+    Eigen::VectorXd mean_next = mean;
+    mean_next.head<3>() += delta + A * (mean.head<3>() - mu.head<3>());
+    // Information form.
+    Eigen::MatrixXd Hn = H;
+    Eigen::VectorXd bn = b, mun = mu;
+    Eigen::MatrixXd workspace(6, n);
+    informationMotionUpdate(Hn, bn, mun, delta, A, U, workspace);
+    const Eigen::MatrixXd Sigma_info = Hn.inverse();
+    EXPECT_LT(relDiff(Sigma_info, Sigma_next), 1e-8);
+    EXPECT_LT(relDiff(Sigma_info * bn, mean_next), 1e-8);
+    EXPECT_LT((mun.head<3>() - (mu.head<3>() + delta)).norm(), 1e-12);
+  }
+}
