@@ -1,0 +1,79 @@
+#pragma once
+// The simulator: a world of point landmarks, a robot that follows a closed (or straight)
+// reference path with noisy velocity controls, and a range-bearing sensor. It produces the
+// RobotLog a real robot would have logged (io/dataset.hpp), so simulated and recorded data
+// take the same road to the filters. Worlds, paths, controller and noise: docs/simulator.md.
+//
+// Everything random comes from one std::mt19937_64 seeded with WorldConfig::seed and drawn
+// in a fixed order (landmarks, then per step: motion noise, then the measurement noise of
+// the detections in subject order), so one config gives a bit-identical log.
+#include <seif/core/types.hpp>
+#include <seif/io/dataset.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+
+namespace seif {
+
+/// The worlds the simulator knows (docs/simulator.md "Presets").
+enum class WorldPreset {
+  Paper,     ///< Thrun et al. 2002: landmarks uniform in the unit square, figure-eight path
+  Uniform,   ///< the paper's density and sensor in a square of side sqrt(N / 50), lawnmower loop
+  Corridor,  ///< a straight strip at the paper's density, driven once: the map grows steadily
+};
+
+/// "paper" | "uniform" | "corridor". Throws std::invalid_argument naming the valid names.
+WorldPreset parseWorldPreset(std::string_view name);
+
+/// The preset's lower-case name, as parseWorldPreset() accepts it.
+std::string_view worldPresetName(WorldPreset preset);
+
+/// Everything that defines a simulated run. Get one from presetConfig() and change fields
+/// if needed; simulate() validates it. Units: metres, seconds, radians.
+struct WorldConfig {
+  WorldPreset preset = WorldPreset::Paper;
+  int landmarks = 50;        ///< number of landmarks N (subjects 6 .. 5 + N)
+  int steps = 500;           ///< number of control steps T
+  std::uint64_t seed = 1;    ///< the one seed of all randomness
+  NoiseModel noise;          ///< true control and measurement noise (standard deviations)
+  double sensor_range = 0.2;  ///< omnidirectional sensor: landmarks within this range are seen
+  double dt = 1.0;           ///< control period [s]
+  double speed = 0.02;       ///< nominal forward speed along the reference path [m/s]
+  /// Landmarks per square unit. Sizes the Uniform square (side sqrt(N / density)) and the
+  /// Corridor (length N / (density * corridor_width)); the Paper square is always [0, 1]^2.
+  double density = 50.0;
+  double corridor_width = 0.4;  ///< width of the Corridor strip, centred on its axis
+};
+
+/// The preset's configuration with N = `landmarks` and T = `steps`; a value <= 0 selects
+/// the preset's default (Paper: 50 landmarks, 500 steps; Uniform: 500 landmarks, at least
+/// 500 steps and enough for one lap of the loop; Corridor: 1000 landmarks, enough steps to
+/// drive past all of them). The defaults of T depend on N, so pass N here rather than
+/// changing `landmarks` afterwards.
+WorldConfig presetConfig(WorldPreset preset, int landmarks = 0, int steps = 0,
+                         std::uint64_t seed = 1);
+
+/// What a run cost and what it saw (all counts over the whole run).
+struct SimStats {
+  /// Largest number of landmarks whose distance was computed in one step: the spatial
+  /// index makes this independent of N at constant density.
+  std::size_t candidates_checked_max_per_step = 0;
+  std::size_t candidates_checked_total = 0;
+  std::size_t measurements = 0;             ///< detections logged
+  double mean_detections_per_step = 0.0;    ///< measurements / steps
+  std::size_t max_detections_per_step = 0;
+  std::size_t steps_without_detection = 0;
+  std::size_t distinct_landmarks_seen = 0;  ///< landmarks detected at least once
+  std::size_t negative_ranges = 0;  ///< noisy ranges below zero (kept: the noise is Gaussian)
+  /// Largest distance between the true position and the reference point the controller
+  /// tracks: how far the noisy robot strayed from its path.
+  double max_tracking_error = 0.0;
+};
+
+/// Runs the simulation (docs/simulator.md). Throws std::invalid_argument for an invalid
+/// config (landmarks < 1, steps < 1, non-positive or non-finite sensor_range, dt, speed,
+/// density or corridor_width, negative or non-finite noise sigmas). Fills `stats` if given.
+RobotLog simulate(const WorldConfig& config, SimStats* stats = nullptr);
+
+}  // namespace seif

@@ -1,0 +1,52 @@
+#pragma once
+// Internal to the simulator: the reference paths the robot tracks (docs/simulator.md).
+// A path is a dense polyline of poses whose headings are the exact tangents of the curve
+// it samples; pose(s) interpolates position linearly and heading along the shorter arc.
+#include <seif/core/types.hpp>
+
+#include <vector>
+
+namespace seif::sim {
+
+class ReferencePath {
+ public:
+  /// `vertices` (at least two) with their tangent headings. A closed path returns from the
+  /// last vertex to the first; an open path continues straight beyond both ends.
+  ReferencePath(std::vector<Pose2> vertices, bool closed);
+
+  double length() const { return length_; }
+  bool closed() const { return closed_; }
+
+  /// The pose at arc length s (taken modulo length() on a closed path).
+  Pose2 pose(double s) const;
+
+ private:
+  std::vector<Pose2> v_;   // closed: the first vertex repeated at the end
+  std::vector<double> s_;  // cumulative arc length at each vertex
+  bool closed_;
+  double length_;
+};
+
+/// Builds a path from straight lines and circular arcs, sampling arcs every 2 degrees.
+class PathBuilder {
+ public:
+  explicit PathBuilder(const Pose2& start);
+  PathBuilder& line(double length);
+  /// Arc of the given radius turning by `angle` (> 0 left / counter-clockwise, < 0 right).
+  PathBuilder& arc(double radius, double angle);
+  ReferencePath build(bool closed) const;
+
+ private:
+  std::vector<Pose2> v_;
+};
+
+/// Figure eight x = cx + a sin u, y = cy + a sin 2u (a 1:2 Lissajous curve), starting at
+/// the centre (u = 0) and sampled at `samples` parameter values.
+ReferencePath figureEight(const Vec2& centre, double amplitude, int samples = 4096);
+
+/// Closed boustrophedon ("lawnmower") loop through the square [0, side]^2 (see
+/// docs/simulator.md): an even number of lanes parallel to y, at most `max_spacing` apart,
+/// `margin` from the border, joined by half circles, and a return leg along the bottom.
+ReferencePath lawnmowerLoop(double side, double margin, double max_spacing);
+
+}  // namespace seif::sim

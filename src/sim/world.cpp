@@ -1,0 +1,315 @@
+// The simulator (docs/simulator.md). Order of the random draws, fixed: all landmarks
+// (x then y, by subject), then per step k: the control noise (e_v, e_w), then for each
+// detection in subject order the measurement noise (e_range, e_bearing).
+#include <seif/sim/world.hpp>
+
+#include <seif/core/angles.hpp>
+#include <seif/models/range_bearing.hpp>
+#include <seif/models/velocity_motion.hpp>
+
+#include "landmark_grid.hpp"
+#include "path.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace seif {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr int kFirstSubject = 6;           // MRCLAM: subjects 1-5 are robots
+constexpr double kMinDetectionRange = 1e-6;  // closer landmarks have no defined bearing
+
+// Paper world: the unit square, a figure eight of amplitude 0.35 (0.15 from the border).
+constexpr double kPaperAmplitude = 0.35;
+constexpr int kPaperLandmarks = 50;
+constexpr int kPaperSteps = 500;
+constexpr double kPaperSpeed = 0.02;  // 10 m in 500 s: three laps of the 3.30 m figure eight
+// Uniform world: lawnmower loop.
+constexpr int kUniformLandmarks = 500;
+constexpr double kUniformSpeed = kPaperSpeed;
+constexpr double kLaneSpacingPerRange = 1.5;  // lanes 1.5 sensor ranges apart: swaths overlap
+constexpr double kMarginPerRange = 0.75;      // path 0.75 sensor ranges inside the border
+// Corridor world.
+constexpr int kCorridorLandmarks = 1000;
+constexpr double kCorridorSpeed = 0.05;  // density 50 x width 0.4 x 0.05 m = 1 new landmark/step
+
+// Tracking controller (Kanayama et al. 1990), gains per control period dt.
+constexpr double kNaturalFrequencyPerStep = 0.2;  // omega_n dt of the lateral/heading loop
+constexpr double kDamping = 0.7;                  // zeta
+constexpr double kAlongTrackGainPerStep = 0.3;    // k_x dt
+constexpr double kMaxTurnPerStep = 1.0;           // |w| dt <= 1 rad
+constexpr double kMaxSpeedFactor = 2.0;           // 0 <= v <= 2 speed
+
+/// mt19937_64 with portable draws (std::*_distribution differ between standard libraries).
+class Rng {
+ public:
+  explicit Rng(std::uint64_t seed) : engine_(seed) {}
+  /// Uniform on [0, 1) with 53 random bits.
+  double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
+  /// Two independent standard normals (Box-Muller; consumes exactly two engine outputs).
+  std::pair<double, double> normalPair() {
+    const double u1 = static_cast<double>((engine_() >> 11) + 1) * 0x1.0p-53;  // (0, 1]
+    const double u2 = uniform();
+    const double radius = std::sqrt(-2.0 * std::log(u1));
+    return {radius * std::cos(2.0 * kPi * u2), radius * std::sin(2.0 * kPi * u2)};
+  }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+double sinc(double a) { return std::abs(a) < 1e-4 ? 1.0 - a * a / 6.0 : std::sin(a) / a; }
+
+/// The geometry of one world: where the landmarks are drawn and the path the robot tracks.
+struct World {
+  Vec2 lo;
+  Vec2 hi;
+  sim::ReferencePath path;
+};
+
+double uniformSide(const WorldConfig& c) { return std::sqrt(c.landmarks / c.density); }
+
+sim::ReferencePath uniformPath(double side, double sensor_range) {
+  const double margin = std::min(kMarginPerRange * sensor_range, 0.25 * side);
+  return sim::lawnmowerLoop(side, margin, kLaneSpacingPerRange * sensor_range);
+}
+
+double corridorLength(const WorldConfig& c) {
+  return c.landmarks / (c.density * c.corridor_width);
+}
+
+World makeWorld(const WorldConfig& c) {
+  switch (c.preset) {
+    case WorldPreset::Paper:
+      return {Vec2(0.0, 0.0), Vec2(1.0, 1.0), sim::figureEight(Vec2(0.5, 0.5), kPaperAmplitude)};
+    case WorldPreset::Uniform: {
+      const double side = uniformSide(c);
+      return {Vec2(0.0, 0.0), Vec2(side, side), uniformPath(side, c.sensor_range)};
+    }
+    case WorldPreset::Corridor: {
+      const double length = corridorLength(c);
+      const double half = 0.5 * c.corridor_width;
+      return {Vec2(0.0, -half), Vec2(length, half),
+              sim::PathBuilder(Pose2(0.0, 0.0, 0.0)).line(length).build(false)};
+    }
+  }
+  throw std::invalid_argument("invalid simulator config: unknown world preset");
+}
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("invalid simulator config: " + what);
+}
+
+template <typename T>
+std::string got(const char* name, T value) {
+  std::ostringstream s;
+  s << name << " (got " << value << ")";
+  return s.str();
+}
+
+void validate(const WorldConfig& c) {
+  require(c.preset == WorldPreset::Paper || c.preset == WorldPreset::Uniform ||
+              c.preset == WorldPreset::Corridor,
+          "unknown world preset");
+  require(c.landmarks >= 1, got("landmarks must be >= 1", c.landmarks));
+  require(c.steps >= 1, got("steps must be >= 1", c.steps));
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  auto sigma = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  require(positive(c.sensor_range), got("sensor_range must be positive and finite", c.sensor_range));
+  require(positive(c.dt), got("dt must be positive and finite", c.dt));
+  require(positive(c.speed), got("speed must be positive and finite", c.speed));
+  require(positive(c.density), got("density must be positive and finite", c.density));
+  require(positive(c.corridor_width),
+          got("corridor_width must be positive and finite", c.corridor_width));
+  require(sigma(c.noise.sigma_v), got("noise.sigma_v must be finite and >= 0", c.noise.sigma_v));
+  require(sigma(c.noise.sigma_w), got("noise.sigma_w must be finite and >= 0", c.noise.sigma_w));
+  require(sigma(c.noise.sigma_range),
+          got("noise.sigma_range must be finite and >= 0", c.noise.sigma_range));
+  require(sigma(c.noise.sigma_bearing),
+          got("noise.sigma_bearing must be finite and >= 0", c.noise.sigma_bearing));
+  if (c.preset == WorldPreset::Corridor) {
+    require(std::isfinite(corridorLength(c)), "corridor length landmarks / (density * width) overflows");
+  }
+}
+
+/// The control that tracks `ref` (feed-forward: the exact velocity-model control from `ref`
+/// to `next`) from the true pose `x`: Kanayama et al. 1990,
+///   v = v_r cos e_th + k_x e_x,   w = w_r + v_r (k_y e_y + k_th sin e_th),
+/// with k_y = (omega_n / speed)^2, k_th = 2 zeta omega_n / speed (docs/simulator.md).
+VelocityControl track(const Pose2& x, const Pose2& ref, const Pose2& next, double speed,
+                      double dt) {
+  const double w_r = wrapAngle(next.z() - ref.z()) / dt;
+  const double v_r = (next.head<2>() - ref.head<2>()).norm() / (dt * sinc(0.5 * w_r * dt));
+  const double c = std::cos(x.z());
+  const double s = std::sin(x.z());
+  const Vec2 d = ref.head<2>() - x.head<2>();
+  const double e_x = c * d.x() + s * d.y();   // along the robot's heading
+  const double e_y = -s * d.x() + c * d.y();  // to its left
+  const double e_th = wrapAngle(ref.z() - x.z());
+  const double omega_n = kNaturalFrequencyPerStep / dt;
+  const double k_x = kAlongTrackGainPerStep / dt;
+  double v = v_r * std::cos(e_th) + k_x * e_x;
+  double w = w_r + v_r * (omega_n * omega_n / (speed * speed) * e_y +
+                          2.0 * kDamping * omega_n / speed * std::sin(e_th));
+  v = std::clamp(v, 0.0, kMaxSpeedFactor * speed);
+  w = std::clamp(w, -kMaxTurnPerStep / dt, kMaxTurnPerStep / dt);
+  return {v, w, dt};
+}
+
+}  // namespace
+
+WorldPreset parseWorldPreset(std::string_view name) {
+  if (name == "paper") return WorldPreset::Paper;
+  if (name == "uniform") return WorldPreset::Uniform;
+  if (name == "corridor") return WorldPreset::Corridor;
+  throw std::invalid_argument("unknown world \"" + std::string(name) +
+                              "\": valid worlds are paper, uniform, corridor");
+}
+
+std::string_view worldPresetName(WorldPreset preset) {
+  switch (preset) {
+    case WorldPreset::Paper: return "paper";
+    case WorldPreset::Uniform: return "uniform";
+    case WorldPreset::Corridor: return "corridor";
+  }
+  return "unknown";
+}
+
+WorldConfig presetConfig(WorldPreset preset, int landmarks, int steps, std::uint64_t seed) {
+  WorldConfig c;
+  c.preset = preset;
+  c.seed = seed;
+  // The paper's noise variances: 1e-4 (forward velocity), 1e-3 (rotational velocity),
+  // 0.002 (range), 0.003 (bearing); sensor range 0.2; 50 landmarks per square unit.
+  c.noise.sigma_v = std::sqrt(1e-4);
+  c.noise.sigma_w = std::sqrt(1e-3);
+  c.noise.sigma_range = std::sqrt(0.002);
+  c.noise.sigma_bearing = std::sqrt(0.003);
+  c.sensor_range = 0.2;
+  c.dt = 1.0;
+  c.density = 50.0;
+  c.corridor_width = 0.4;
+  auto lapSteps = [&](double length) {
+    return std::ceil(length / (c.speed * c.dt));
+  };
+  auto toSteps = [](double s) {
+    require(s < 2e9, "the default number of steps does not fit an int; pass steps");
+    return static_cast<int>(s);
+  };
+  switch (preset) {
+    case WorldPreset::Paper:
+      c.landmarks = landmarks > 0 ? landmarks : kPaperLandmarks;
+      c.speed = kPaperSpeed;
+      c.steps = steps > 0 ? steps : kPaperSteps;
+      break;
+    case WorldPreset::Uniform:
+      c.landmarks = landmarks > 0 ? landmarks : kUniformLandmarks;
+      c.speed = kUniformSpeed;
+      c.steps = steps > 0 ? steps
+                          : toSteps(std::max<double>(
+                                kPaperSteps, lapSteps(uniformPath(uniformSide(c), c.sensor_range)
+                                                          .length())));
+      break;
+    case WorldPreset::Corridor:
+      c.landmarks = landmarks > 0 ? landmarks : kCorridorLandmarks;
+      c.speed = kCorridorSpeed;
+      c.steps = steps > 0 ? steps : toSteps(std::max(1.0, lapSteps(corridorLength(c))));
+      break;
+  }
+  return c;
+}
+
+RobotLog simulate(const WorldConfig& config, SimStats* stats) {
+  validate(config);
+  const WorldConfig& c = config;
+  const World world = makeWorld(c);
+  const auto n = static_cast<std::size_t>(c.landmarks);
+  const auto T = static_cast<std::size_t>(c.steps);
+  Rng rng(c.seed);
+
+  std::vector<Vec2> landmarks(n);
+  const Vec2 extent = world.hi - world.lo;
+  for (Vec2& y : landmarks) {
+    const double ux = rng.uniform();
+    const double uy = rng.uniform();
+    y = world.lo + Vec2(ux * extent.x(), uy * extent.y());
+  }
+  const sim::LandmarkGrid grid(landmarks, world.lo, world.hi, c.sensor_range);
+
+  RobotLog log;
+  {
+    std::ostringstream source;
+    source << "simulated " << worldPresetName(c.preset) << " world (" << c.landmarks
+           << " landmarks, " << c.steps << " steps, seed " << c.seed << ")";
+    log.source = source.str();
+  }
+  log.robot = 1;
+  log.noise = c.noise;
+  for (std::size_t i = 0; i < n; ++i) {
+    log.landmarks.emplace_hint(log.landmarks.end(), kFirstSubject + static_cast<int>(i),
+                               landmarks[i]);
+  }
+  log.odometry.reserve(T);
+  log.groundtruth.reserve(T + 1);
+  {  // Expected detections per step, plus 10 %: avoids the copies (and the memory peak) of
+     // growing a vector of millions of measurements. Only a hint: the vector still grows.
+    const double per_step = std::min(static_cast<double>(n), n / (extent.x() * extent.y()) *
+                                                                 kPi * c.sensor_range * c.sensor_range);
+    const double expected = 1.1 * per_step * static_cast<double>(T) + 64.0;
+    log.measurements.reserve(static_cast<std::size_t>(std::min(expected, 0x1.0p27)));
+  }
+
+  SimStats st;
+  std::vector<char> seen(n, 0);
+  std::vector<std::uint32_t> found;
+  auto reference = [&](std::size_t k) {
+    return world.path.pose(c.speed * (static_cast<double>(k) * c.dt));
+  };
+  Pose2 x = reference(0);
+  Pose2 ref = x;
+  log.groundtruth.push_back({0.0, x});
+  for (std::size_t k = 0; k < T; ++k) {
+    const Pose2 next = reference(k + 1);
+    const VelocityControl u = track(x, ref, next, c.speed, c.dt);
+    log.odometry.push_back({static_cast<double>(k) * c.dt, u.v, u.w});
+
+    const auto [e_v, e_w] = rng.normalPair();
+    x = VelocityMotionModel::apply(
+        x, {u.v + c.noise.sigma_v * e_v, u.w + c.noise.sigma_w * e_w, c.dt});
+    const double t = static_cast<double>(k + 1) * c.dt;
+    log.groundtruth.push_back({t, x});
+    ref = next;
+    st.max_tracking_error = std::max(st.max_tracking_error, (x.head<2>() - ref.head<2>()).norm());
+
+    found.clear();
+    const std::size_t checked = grid.query(x.head<2>(), c.sensor_range, kMinDetectionRange, found);
+    st.candidates_checked_total += checked;
+    st.candidates_checked_max_per_step = std::max(st.candidates_checked_max_per_step, checked);
+    st.max_detections_per_step = std::max(st.max_detections_per_step, found.size());
+    if (found.empty()) ++st.steps_without_detection;
+    for (const std::uint32_t i : found) {
+      const Vec2 z = RangeBearingModel::predict(x, landmarks[i]);
+      const auto [e_r, e_b] = rng.normalPair();
+      const double range = z.x() + c.noise.sigma_range * e_r;
+      if (range < 0.0) ++st.negative_ranges;
+      log.measurements.push_back({t, kFirstSubject + static_cast<int>(i), range,
+                                  wrapAngle(z.y() + c.noise.sigma_bearing * e_b)});
+      seen[i] = 1;
+    }
+  }
+  st.measurements = log.measurements.size();
+  st.mean_detections_per_step = static_cast<double>(st.measurements) / static_cast<double>(T);
+  st.distinct_landmarks_seen = static_cast<std::size_t>(std::count(seen.begin(), seen.end(), 1));
+  if (stats) *stats = st;
+  return log;
+}
+
+}  // namespace seif
