@@ -1,13 +1,53 @@
 #include "commands.hpp"
 
-#include <CLI/CLI.hpp>
+#include <seif/core/errors.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
 
 namespace seif::cli {
 
 int main(int argc, char** argv) {
-  CLI::App app{"seif: SLAM with Sparse Extended Information Filters"};
+  CLI::App app{
+      "seif - SLAM with Sparse Extended Information Filters (Thrun et al. 2002).\n\n"
+      "Typical use:\n"
+      "  seif simulate --preset paper --seed 1 --out world       # a simulated dataset\n"
+      "  seif run --dataset world --filter seif --out result      # run a filter on it\n"
+      "  seif run --dataset ../shared/data/mrclam/MRCLAM_Dataset6 --robot 3 --filter ekf --out r3\n"
+      "  seif paper --runs 50 --out out/paper                     # the paper's experiment\n"
+      "  seif bench --filters ekf,seif --landmarks 100,1000 --out out/bench\n\n"
+      "Datasets use the UTIAS MRCLAM layout (see README). Exit status: 0 success, 1 usage\n"
+      "error, 2 bad input data or a numerical failure (one line on stderr names the cause)."};
   app.require_subcommand(1);
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", "seif 0.1.0");
+  addSimulateCommand(app);
+  addRunCommand(app);
+  addBenchCommand(app);
+  addPaperCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 1;
+  } catch (const DataError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  } catch (const NumericError& e) {
+    std::fprintf(stderr, "seif: numerical failure: %s\n", e.what());
+    return 2;
+  } catch (const ModelError& e) {
+    std::fprintf(stderr, "seif: %s\n", e.what());
+    return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::fprintf(stderr, "seif: %s\n", e.what());
+    return 2;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "seif: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "seif: error: %s\n", e.what());
+    return 2;
+  }
   return 0;
 }
 

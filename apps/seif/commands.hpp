@@ -1,9 +1,17 @@
 #pragma once
-// The `seif` command-line tool: one function per sub-command, registered in commands.cpp.
+// The `seif` command-line tool. Each sub-command lives in its own cmd_<name>.cpp and is
+// registered by main(); options shared by several commands live in options.hpp.
+#include <CLI/CLI.hpp>
+
 namespace seif::cli {
 
 /// Parses argv, runs the chosen sub-command, returns the process exit status:
-/// 0 success, 1 usage error, 2 bad input data or numerical failure.
+/// 0 success, 1 usage error, 2 bad input data or a numerical failure.
 int main(int argc, char** argv);
+
+void addSimulateCommand(CLI::App& app);
+void addRunCommand(CLI::App& app);
+void addBenchCommand(CLI::App& app);
+void addPaperCommand(CLI::App& app);
 
 }  // namespace seif::cli

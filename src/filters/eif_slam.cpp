@@ -60,6 +60,14 @@ Mat2 EifSlam::landmarkCovariance(int id) const {
 
 FilterStats EifSlam::stats() const { return denseLinkStats(H_); }
 
+std::size_t EifSlam::robotLinks() const {
+  std::size_t n = 0;
+  for (int s = 0; s < index_.size(); ++s) {
+    if (H_.block<3, 2>(0, LandmarkIndex::stateIndex(s)).cwiseAbs().maxCoeff() > 0.0) ++n;
+  }
+  return n;
+}
+
 void EifSlam::predict(const VelocityControl& u) {
   Mat3 J_x;
   const Pose2 x = mu_.head<3>();

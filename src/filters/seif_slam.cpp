@@ -72,8 +72,13 @@ void SeifSlam::addToLink(int a, int c, const Mat2& H_ac) {
     *findLink(c, a) += H_ac.transpose();
     return;
   }
-  nodes_[static_cast<std::size_t>(a)].links.push_back({c, H_ac});
-  nodes_[static_cast<std::size_t>(c)].links.push_back({a, H_ac.transpose()});
+  Node& na = nodes_[static_cast<std::size_t>(a)];
+  Node& nc = nodes_[static_cast<std::size_t>(c)];
+  na.links.push_back({c, H_ac});
+  nc.links.push_back({a, H_ac.transpose()});
+  ++landmark_links_;
+  max_landmark_links_ = std::max({max_landmark_links_, na.links.size() + (na.active >= 0 ? 1 : 0),
+                                  nc.links.size() + (nc.active >= 0 ? 1 : 0)});
 }
 
 void SeifSlam::gather(const std::vector<int>& order) {
@@ -236,6 +241,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations) {
     if (node.active < 0) {  // observing a passive landmark activates it
       node.active = static_cast<int>(robot_links_.size());
       robot_links_.push_back({slot, Mat32::Zero(), step_});
+      max_landmark_links_ = std::max(max_landmark_links_, node.links.size() + 1);
     }
     RobotLink& link = robot_links_[static_cast<std::size_t>(node.active)];
     link.H += info.H.topRightCorner<3, 2>();
@@ -388,15 +394,11 @@ std::vector<int> SeifSlam::activeLandmarks() const {
 }
 
 FilterStats SeifSlam::stats() const {
-  FilterStats s;
+  FilterStats s;  // O(1): counters kept by the store
   s.landmarks = nodes_.size();
   s.robot_links = robot_links_.size();
-  std::size_t half_links = 0;
-  for (const Node& node : nodes_) {
-    half_links += node.links.size();
-    s.max_landmark_links = std::max(s.max_landmark_links, node.links.size() + (node.active >= 0 ? 1 : 0));
-  }
-  s.links = s.robot_links + half_links / 2;
+  s.links = s.robot_links + landmark_links_;
+  s.max_landmark_links = max_landmark_links_;
   s.blocks_touched = blocks_touched_;
   return s;
 }

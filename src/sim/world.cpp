@@ -299,12 +299,18 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
       const Vec2 z = RangeBearingModel::predict(x, landmarks[i]);
       const auto [e_r, e_b] = rng.normalPair();
       const double range = z.x() + c.noise.sigma_range * e_r;
-      if (range < 0.0) ++st.negative_ranges;
+      if (range <= 0.0) {  // a range sensor reports no return, never a negative range
+        ++st.negative_ranges;
+        continue;
+      }
       log.measurements.push_back({t, kFirstSubject + static_cast<int>(i), range,
                                   wrapAngle(z.y() + c.noise.sigma_bearing * e_b)});
       seen[i] = 1;
     }
   }
+  // A final stop command stamped T dt closes the last control interval, so that a reader
+  // knows when the last step ends even if nothing was seen in it.
+  log.odometry.push_back({static_cast<double>(T) * c.dt, 0.0, 0.0});
   st.measurements = log.measurements.size();
   st.mean_detections_per_step = static_cast<double>(st.measurements) / static_cast<double>(T);
   st.distinct_landmarks_seen = static_cast<std::size_t>(std::count(seen.begin(), seen.end(), 1));

@@ -10,14 +10,17 @@ namespace seif {
 class DataError : public std::runtime_error {
  public:
   DataError(const std::string& file, long line, const std::string& what)
-      : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) +
-                           ": " + what),
-        file_(file),
-        line_(line) {}
+      : std::runtime_error(format(file, line, what)), file_(file), line_(line) {}
   const std::string& file() const { return file_; }
   long line() const { return line_; }
 
  private:
+  static std::string format(const std::string& file, long line, const std::string& what) {
+    std::string msg = file;
+    if (line > 0) msg.append(":").append(std::to_string(line));
+    msg.append(": ").append(what);
+    return msg;
+  }
   std::string file_;
   long line_;
 };

@@ -26,6 +26,10 @@ class EifSlam final : public SlamFilter {
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
   FilterStats stats() const override;
+  std::size_t robotLinks() const override;
+  std::size_t blocksTouched() const override {
+    return (landmarkIds().size() + 1) * (landmarkIds().size() + 1);
+  }
 
   Eigen::VectorXd mean() const override { return mu_; }
   Eigen::MatrixXd covariance() const override;

@@ -25,6 +25,10 @@ class EkfSlam final : public SlamFilter {
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
   FilterStats stats() const override;
+  std::size_t robotLinks() const override { return landmarkIds().size(); }  // Sigma^-1 is dense
+  std::size_t blocksTouched() const override {
+    return (landmarkIds().size() + 1) * (landmarkIds().size() + 1);
+  }
 
   Eigen::VectorXd mean() const override;
   Eigen::MatrixXd covariance() const override { return sigma_; }

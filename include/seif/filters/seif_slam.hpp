@@ -53,6 +53,8 @@ class SeifSlam final : public SlamFilter {
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
   FilterStats stats() const override;
+  std::size_t robotLinks() const override { return robot_links_.size(); }
+  std::size_t blocksTouched() const override { return blocks_touched_; }
 
   Eigen::VectorXd mean() const override;
   Eigen::MatrixXd covariance() const override;
@@ -122,6 +124,8 @@ class SeifSlam final : public SlamFilter {
   std::mt19937_64 rng_;
   long step_ = 0;
   std::size_t blocks_touched_ = 0;
+  std::size_t landmark_links_ = 0;      // landmark-landmark links (unordered pairs)
+  std::size_t max_landmark_links_ = 0;  // most links any landmark has had
   double last_sparsification_residual_ = 0.0;
 
   // Work buffers, reused every step (no allocation in the steady state).

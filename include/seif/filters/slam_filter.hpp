@@ -24,7 +24,7 @@ struct FilterStats {
   std::size_t landmarks = 0;
   std::size_t links = 0;               ///< non-zero off-diagonal blocks of H (unordered pairs)
   std::size_t robot_links = 0;         ///< landmarks linked to the robot (the active set)
-  std::size_t max_landmark_links = 0;  ///< largest number of links of any landmark
+  std::size_t max_landmark_links = 0;  ///< most links any landmark has (SEIF: has had)
   std::size_t blocks_touched = 0;      ///< H blocks read or written by the last step
 };
 
@@ -53,7 +53,12 @@ class SlamFilter {
   virtual bool hasLandmark(int id) const = 0;
   virtual Vec2 landmark(int id) const = 0;
   virtual Mat2 landmarkCovariance(int id) const = 0;
+  /// Structure of H. O(1) for the SEIF; dense filters count their whole matrix.
   virtual FilterStats stats() const = 0;
+  /// Landmarks linked to the robot now, and H blocks touched by the last step: both cheap
+  /// enough to read after every step.
+  virtual std::size_t robotLinks() const = 0;
+  virtual std::size_t blocksTouched() const = 0;
 
   /// Full-state moments and information in the state order [x, y, th, landmarks...].
   /// Dense and O(N^3) for information filters: for tests and figures, not for the loop.

@@ -1,0 +1,46 @@
+#pragma once
+// Runs a filter over a dataset and measures it: the one loop behind `seif run`,
+// `seif paper` and `seif bench`.
+#include <seif/filters/slam_filter.hpp>
+#include <seif/io/dataset.hpp>
+
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <optional>
+#include <vector>
+
+namespace seif {
+
+struct RunOutput {
+  std::vector<TimedPose> trajectory;  ///< the start pose, then the pose after every step
+  std::vector<double> step_seconds;   ///< wall time of every step (predict + update)
+  double seconds = 0.0;               ///< sum of step_seconds
+  FilterStats final_stats;
+  std::size_t max_robot_links = 0;     ///< over all steps
+  std::size_t max_blocks_touched = 0;  ///< over all steps
+};
+
+/// The pose the filter starts from: the ground truth at the first step's time when the
+/// dataset has ground truth, else the origin.
+Pose2 startPose(const Dataset& data);
+
+/// Runs every step of `data` through `filter`. `progress(done, total)` is called now and then.
+/// A failure inside a step is rethrown as NumericError naming the step and its time.
+RunOutput runFilter(SlamFilter& filter, const Dataset& data,
+                    const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+/// Integrates the controls alone from `start` (dead reckoning), at the same stamps as runFilter.
+std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start);
+
+/// Absolute trajectory error: RMS position error against the ground truth interpolated at
+/// the estimate's stamps (stamps outside the ground truth's span are skipped). No alignment:
+/// filters start at the true pose, in the ground truth's frame. nullopt without ground truth.
+std::optional<double> ateRmse(const std::vector<TimedPose>& estimate,
+                              const std::vector<TimedPose>& groundtruth);
+
+/// RMS landmark position error of the filter's map against the true positions of the
+/// landmarks it mapped. nullopt without ground truth or mapped landmarks.
+std::optional<double> landmarkRmse(const SlamFilter& filter, const std::map<int, Vec2>& truth);
+
+}  // namespace seif

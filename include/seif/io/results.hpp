@@ -1,0 +1,18 @@
+#pragma once
+// Result files of a run: trajectory.tum (TUM format, read by evo and most SLAM tools) and
+// map.csv (id, x, y, and the 2x2 marginal covariance).
+#include <seif/filters/slam_filter.hpp>
+#include <seif/io/dataset.hpp>
+
+#include <filesystem>
+#include <vector>
+
+namespace seif {
+
+/// "timestamp tx ty tz qx qy qz qw" per line; z = 0 and the quaternion is the yaw rotation.
+void writeTum(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory);
+
+/// Header "id,x,y,cov_xx,cov_xy,cov_yy", one row per mapped landmark in map order.
+void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter);
+
+}  // namespace seif
