@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 namespace seif {
 
@@ -64,32 +65,61 @@ std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start) {
   return track;
 }
 
-std::optional<double> ateRmse(const std::vector<TimedPose>& estimate,
-                              const std::vector<TimedPose>& groundtruth) {
-  if (groundtruth.empty()) return std::nullopt;
-  const double t0 = groundtruth.front().time, t1 = groundtruth.back().time;
-  double sum = 0.0;
-  std::size_t n = 0;
-  for (const TimedPose& p : estimate) {
-    if (p.time < t0 || p.time > t1) continue;
-    sum += (p.pose.head<2>() - interpolatePose(groundtruth, p.time).head<2>()).squaredNorm();
-    ++n;
+double alignedRmse(const std::vector<Vec2>& estimate, const std::vector<Vec2>& truth,
+                   Alignment alignment) {
+  const std::size_t n = estimate.size();
+  if (n == 0 || n != truth.size()) throw std::invalid_argument("alignedRmse: point sets differ in size");
+  Eigen::Matrix2d R = Eigen::Matrix2d::Identity();
+  Vec2 t = Vec2::Zero();
+  if (alignment == Alignment::Rigid && n >= 2) {
+    Vec2 ce = Vec2::Zero(), ct = Vec2::Zero();
+    for (std::size_t i = 0; i < n; ++i) {
+      ce += estimate[i];
+      ct += truth[i];
+    }
+    ce /= static_cast<double>(n);
+    ct /= static_cast<double>(n);
+    // The rotation angle maximising sum (q_i - ct)^T R (p_i - ce), in closed form in 2-D.
+    double sxx = 0.0, sxy = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2 p = estimate[i] - ce, q = truth[i] - ct;
+      sxx += p.dot(q);
+      sxy += p.x() * q.y() - p.y() * q.x();
+    }
+    const double angle = std::atan2(sxy, sxx);
+    R << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
+    t = ct - R * ce;
   }
-  if (n == 0) return std::nullopt;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) sum += (R * estimate[i] + t - truth[i]).squaredNorm();
   return std::sqrt(sum / static_cast<double>(n));
 }
 
-std::optional<double> landmarkRmse(const SlamFilter& filter, const std::map<int, Vec2>& truth) {
-  double sum = 0.0;
-  std::size_t n = 0;
+std::optional<double> ateRmse(const std::vector<TimedPose>& estimate,
+                              const std::vector<TimedPose>& groundtruth, Alignment alignment) {
+  if (groundtruth.empty()) return std::nullopt;
+  const double t0 = groundtruth.front().time, t1 = groundtruth.back().time;
+  std::vector<Vec2> est, truth;
+  for (const TimedPose& p : estimate) {
+    if (p.time < t0 || p.time > t1) continue;
+    est.push_back(p.pose.head<2>());
+    truth.push_back(interpolatePose(groundtruth, p.time).head<2>());
+  }
+  if (est.empty()) return std::nullopt;
+  return alignedRmse(est, truth, alignment);
+}
+
+std::optional<double> landmarkRmse(const SlamFilter& filter, const std::map<int, Vec2>& truth,
+                                   Alignment alignment) {
+  std::vector<Vec2> est, ref;
   for (int id : filter.landmarkIds()) {
     const auto it = truth.find(id);
     if (it == truth.end()) continue;
-    sum += (filter.landmark(id) - it->second).squaredNorm();
-    ++n;
+    est.push_back(filter.landmark(id));
+    ref.push_back(it->second);
   }
-  if (n == 0) return std::nullopt;
-  return std::sqrt(sum / static_cast<double>(n));
+  if (est.empty()) return std::nullopt;
+  return alignedRmse(est, ref, alignment);
 }
 
 }  // namespace seif

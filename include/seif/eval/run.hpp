@@ -33,14 +33,25 @@ RunOutput runFilter(SlamFilter& filter, const Dataset& data,
 /// Integrates the controls alone from `start` (dead reckoning), at the same stamps as runFilter.
 std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start);
 
+/// Whether an error is measured in the ground truth's frame as it is (the filters start at
+/// the true pose) or after the rigid 2-D motion that best aligns estimate and truth
+/// (least squares, Horn/Umeyama without scale), as the TUM benchmark and evo define ATE.
+enum class Alignment { None, Rigid };
+
+/// RMS of |R p_i + t - q_i| over point pairs, with (R, t) = identity or the best rigid fit.
+double alignedRmse(const std::vector<Vec2>& estimate, const std::vector<Vec2>& truth,
+                   Alignment alignment);
+
 /// Absolute trajectory error: RMS position error against the ground truth interpolated at
-/// the estimate's stamps (stamps outside the ground truth's span are skipped). No alignment:
-/// filters start at the true pose, in the ground truth's frame. nullopt without ground truth.
+/// the estimate's stamps (stamps outside the ground truth's span are skipped).
+/// nullopt without ground truth.
 std::optional<double> ateRmse(const std::vector<TimedPose>& estimate,
-                              const std::vector<TimedPose>& groundtruth);
+                              const std::vector<TimedPose>& groundtruth,
+                              Alignment alignment = Alignment::None);
 
 /// RMS landmark position error of the filter's map against the true positions of the
 /// landmarks it mapped. nullopt without ground truth or mapped landmarks.
-std::optional<double> landmarkRmse(const SlamFilter& filter, const std::map<int, Vec2>& truth);
+std::optional<double> landmarkRmse(const SlamFilter& filter, const std::map<int, Vec2>& truth,
+                                   Alignment alignment = Alignment::None);
 
 }  // namespace seif
