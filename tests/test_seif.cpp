@@ -154,25 +154,31 @@ TEST(Seif, AmortizedMeanConvergesToTheExactMean) {
 }
 
 TEST(Seif, AccuracyIsCloseToTheEkf) {
-  double ekf_sum = 0, seif_sum = 0, exact_sum = 0;
+  double ekf_sum = 0, seif_sum = 0, exact_sum = 0, after_sum = 0;
   for (std::uint64_t seed = 20; seed < 26; ++seed) {
     const test::Scenario s = test::makeScenario(seed, 40, 400);
     EkfSlam ekf(s.start, configFor(s));
     SeifSlam seif(s.start, configFor(s));
+    SeifOptions after;
+    after.recovery = SeifOptions::Recovery::AfterMeasurement;
+    SeifSlam seif_after(s.start, configFor(s), after);
     SeifOptions exact_options;
     exact_options.mean = SeifOptions::Mean::Exact;
     SeifSlam seif_exact(s.start, configFor(s), exact_options);
     for (const Step& step : s.steps) {
       ekf.step(step.u, step.observations);
       seif.step(step.u, step.observations);
+      seif_after.step(step.u, step.observations);
       seif_exact.step(step.u, step.observations);
     }
     ekf_sum += landmarkRmse(ekf, s);
     seif_sum += landmarkRmse(seif, s);
+    after_sum += landmarkRmse(seif_after, s);
     exact_sum += landmarkRmse(seif_exact, s);
   }
   EXPECT_LT(exact_sum, 1.5 * ekf_sum) << "ekf " << ekf_sum << " seif(exact mean) " << exact_sum;
   EXPECT_LT(seif_sum, 2.0 * ekf_sum) << "ekf " << ekf_sum << " seif " << seif_sum;
+  EXPECT_LT(after_sum, 2.0 * ekf_sum) << "ekf " << ekf_sum << " seif (relax after update) " << after_sum;
 }
 
 TEST(Seif, OptionsAreValidated) {
@@ -184,6 +190,8 @@ TEST(Seif, OptionsAreValidated) {
   EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), std::invalid_argument);
   EXPECT_EQ(SeifOptions::parseMean("exact"), SeifOptions::Mean::Exact);
   EXPECT_THROW(SeifOptions::parseDeactivate("random"), std::invalid_argument);
+  EXPECT_EQ(SeifOptions::parseRecovery("after-update"), SeifOptions::Recovery::AfterMeasurement);
+  EXPECT_THROW(SeifOptions::parseRecovery("sometimes"), std::invalid_argument);
 }
 
 TEST(InformationMotionUpdate, IsTheLinearisedPredictionForAnyLinearisationPoint) {

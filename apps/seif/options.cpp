@@ -63,6 +63,11 @@ void SeifFlags::add(CLI::App& cmd) {
                  "SEIF sparsification: deactivate the weakest-linked or the oldest-seen landmarks")
       ->check(CLI::IsMember({"weakest", "oldest"}))
       ->capture_default_str();
+  cmd.add_option("--recovery", recovery,
+                 "SEIF: relax the amortized mean before the measurement update (the book's order) "
+                 "or after it; see docs/seif.md")
+      ->check(CLI::IsMember({"after-update", "before-update"}))
+      ->capture_default_str();
   cmd.add_option("--seed", seed, "SEIF: seed of the random choice of relaxed landmarks")
       ->capture_default_str();
 }
@@ -73,6 +78,7 @@ SeifOptions SeifFlags::resolve() const {
   o.relax = relax;
   o.mean = SeifOptions::parseMean(mean);
   o.deactivate = SeifOptions::parseDeactivate(deactivate);
+  o.recovery = SeifOptions::parseRecovery(recovery);
   o.seed = seed;
   return o;
 }
@@ -89,6 +95,7 @@ nlohmann::json toJson(const SeifOptions& o) {
           {"relax", o.relax},
           {"mean", o.mean == SeifOptions::Mean::Exact ? "exact" : "amortized"},
           {"deactivate", o.deactivate == SeifOptions::Deactivate::Oldest ? "oldest" : "weakest"},
+          {"recovery", o.recovery == SeifOptions::Recovery::BeforeMeasurement ? "before-update" : "after-update"},
           {"seed", o.seed}};
 }
 

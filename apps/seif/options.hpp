@@ -29,6 +29,7 @@ struct SeifFlags {
   int relax = 10;
   std::string mean = "amortized";
   std::string deactivate = "weakest";
+  std::string recovery = "before-update";
   std::uint64_t seed = 1;
   void add(CLI::App& cmd);
   SeifOptions resolve() const;

@@ -26,6 +26,13 @@ SeifOptions::Deactivate SeifOptions::parseDeactivate(std::string_view s) {
                               "' (expected weakest or oldest)");
 }
 
+SeifOptions::Recovery SeifOptions::parseRecovery(std::string_view s) {
+  if (s == "after-update") return Recovery::AfterMeasurement;
+  if (s == "before-update") return Recovery::BeforeMeasurement;
+  throw std::invalid_argument("unknown recovery point '" + std::string(s) +
+                              "' (expected after-update or before-update)");
+}
+
 struct SeifSlam::Factor {
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt;
 };
@@ -286,12 +293,13 @@ void SeifSlam::sparsify() {
 }
 
 void SeifSlam::update(std::span<const Observation> observations) {
-  if (options_.mean == SeifOptions::Mean::Amortized) {
-    recoverMean();
-    measurementUpdate(observations);
-  } else {
-    measurementUpdate(observations);
+  const bool book_order = options_.recovery == SeifOptions::Recovery::BeforeMeasurement;
+  if (options_.mean == SeifOptions::Mean::Amortized && book_order) recoverMean();
+  measurementUpdate(observations);
+  if (options_.mean == SeifOptions::Mean::Exact) {
     recoverExactMean();  // sparsification then keeps this mean exactly
+  } else if (!book_order) {
+    recoverMean();
   }
   sparsify();
 }

@@ -22,6 +22,7 @@ namespace seif {
 struct SeifOptions {
   enum class Mean { Amortized, Exact };
   enum class Deactivate { Weakest, Oldest };
+  enum class Recovery { AfterMeasurement, BeforeMeasurement };
 
   int max_active = 6;  ///< theta_x: landmarks linked to the robot after each step
   int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
@@ -31,10 +32,16 @@ struct SeifOptions {
   /// Weakest: deactivate the landmarks with the weakest normalised link to the robot (the
   /// paper). Oldest: those observed least recently.
   Deactivate deactivate = Deactivate::Weakest;
+  /// When the amortised mean is relaxed within update(): BeforeMeasurement (default) is the
+  /// book's order (Probabilistic Robotics Table 12.1): the measurement update linearises at
+  /// a freshly relaxed mean. AfterMeasurement lets the sparsification and the next motion
+  /// update use a mean that already contains the newest measurements. docs/seif.md compares them.
+  Recovery recovery = Recovery::BeforeMeasurement;
   std::uint64_t seed = 1;  ///< for the random choice of relaxed landmarks
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
+  static Recovery parseRecovery(std::string_view s);      ///< "after-update" | "before-update"
 };
 
 class SeifSlam final : public SlamFilter {
@@ -62,7 +69,8 @@ class SeifSlam final : public SlamFilter {
 
   // The paper's four steps, public so that each can be run and checked alone.
   // predict(u) = motionUpdate(u); update(z) = recoverMean(); measurementUpdate(z); sparsify()
-  // (with the exact mean: measurementUpdate(z); recoverExactMean(); sparsify()).
+  // (Recovery::AfterMeasurement: recoverMean() after measurementUpdate(); exact mean:
+  // measurementUpdate(z); recoverExactMean(); sparsify()).
   void motionUpdate(const VelocityControl& u);              ///< §1, Lemma 3
   void recoverMean();                                      ///< §2, amortised, eq. (42)
   void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
