@@ -1,0 +1,111 @@
+#pragma once
+// The experiment of Thrun et al. 2002, §4 (algorithm.md "What the paper measured"): on the
+// simulator's paper world (50 landmarks, 500 update cycles, known data association) run the
+// EKF, the SEIF with exact mean and the constant-time SEIF on identical data, and measure
+// each one's final map error, final number of links and time per update. One call of
+// runPaperExperiment() is one run of the Monte-Carlo study; `seif paper` runs many in
+// parallel and summarises them (eval/stats.hpp).
+#include <seif/eval/run.hpp>
+#include <seif/filters/seif_slam.hpp>
+#include <seif/filters/slam_filter.hpp>
+#include <seif/io/dataset.hpp>
+#include <seif/sim/world.hpp>
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace seif {
+
+/// What the experiment varies. The defaults are the paper's.
+struct PaperOptions {
+  int landmarks = 0;  ///< N; <= 0: the paper preset's 50
+  int steps = 0;      ///< update cycles; <= 0: the paper preset's 500
+  int active = 6;     ///< theta_x of both SEIFs (the paper: 6)
+  int relax = 10;     ///< K of the constant-time SEIF (the paper: 10)
+  /// Extra constant-time SEIFs, one per theta_x listed (the journal version's study),
+  /// named "seif_active_<theta_x>" and run on the same data.
+  std::vector<int> sweep_active;
+};
+
+/// One filter of the experiment.
+struct PaperFilterSpec {
+  std::string name;  ///< "ekf", "seif_exact", "seif" or "seif_active_<theta_x>"
+  bool ekf = false;  ///< EkfSlam; otherwise SeifSlam with `seif`
+  SeifOptions seif;  ///< the SEIF's options (its seed is set per run)
+};
+
+/// The filters in the order runPaperExperiment() runs and reports them: "ekf",
+/// "seif_exact" (SeifOptions::Mean::Exact), "seif" (amortised, K = relax), then the sweep.
+std::vector<PaperFilterSpec> paperFilters(const PaperOptions& options);
+
+/// The simulator configuration of the run with simulator seed `seed`:
+/// presetConfig(WorldPreset::Paper, options.landmarks, options.steps, seed).
+WorldConfig paperWorld(std::uint64_t seed, const PaperOptions& options);
+
+/// Mean squared landmark position error [m^2]: the mean over the landmarks the filter
+/// mapped (and `truth` knows) of |estimate - true position|^2. This is the "final error"
+/// of `seif paper` when taken after the last step. `count` receives the number of
+/// landmarks averaged; NaN when there are none.
+double landmarkMse(const SlamFilter& filter, const std::map<int, Vec2>& truth,
+                   std::size_t* count = nullptr);
+
+/// What one filter did in one run.
+struct PaperFilterResult {
+  std::string name;
+  double mse = 0.0;         ///< landmarkMse() after the last step [m^2]
+  double rmse = 0.0;        ///< sqrt(mse) [m]
+  double pose_error = 0.0;  ///< final robot position error [m]
+  std::size_t mapped = 0;   ///< landmarks in the filter's map at the end
+  FilterStats stats;        ///< after the last step (links = non-zero off-diagonal H blocks)
+  std::vector<double> step_seconds;  ///< wall time of every predict + update [s]
+};
+
+/// One run: the data, and every filter's result on it.
+struct PaperRun {
+  std::uint64_t seed = 0;   ///< simulator seed (also the SEIFs' relaxation seed)
+  std::size_t steps = 0;    ///< filter steps (buildDataset())
+  SimStats sim;             ///< what the simulator saw
+  std::vector<PaperFilterResult> filters;  ///< in paperFilters() order
+};
+
+/// The filters of a run kept alive after it, with their data: for figures.
+struct PaperRunDetail {
+  Dataset data;
+  std::vector<std::unique_ptr<SlamFilter>> filters;  ///< in paperFilters() order
+  std::vector<RunOutput> outputs;
+};
+
+/// Simulates paperWorld(seed, options) and runs every filter of paperFilters(options) on
+/// the same data, from the true start pose (startPose()) with the world's true noise.
+/// Deterministic in (seed, options) except the step times. Fills `detail` if given.
+/// A filter failure is rethrown as NumericError naming the seed.
+PaperRun runPaperExperiment(std::uint64_t seed, const PaperOptions& options,
+                            PaperRunDetail* detail = nullptr);
+
+/// A filter's state laid out for figures, landmarks ordered by id (so that two filters'
+/// matrices are comparable whatever order they mapped the landmarks in).
+struct FilterSnapshot {
+  struct Link {
+    int a = -1;  ///< landmark id, or -1 for the robot
+    int b = -1;  ///< landmark id
+    /// Largest |H_ij| / sqrt(H_ii H_jj) over the entries of the link's block.
+    double strength = 0.0;
+  };
+  std::vector<int> ids;         ///< landmark ids, ascending: matrix order after the pose
+  Eigen::VectorXd mean;         ///< [x, y, th, landmarks by id]
+  Eigen::MatrixXd covariance;   ///< same order
+  Eigen::MatrixXd information;  ///< same order
+  /// Non-zero off-diagonal blocks of the information matrix: robot-landmark links first
+  /// (a = -1), then landmark-landmark links (a < b).
+  std::vector<Link> links;
+};
+
+/// Dense: O(N^3) for information filters. For figures and tests.
+FilterSnapshot snapshotById(const SlamFilter& filter);
+
+}  // namespace seif

@@ -1,0 +1,51 @@
+#pragma once
+// Small-sample statistics for Monte-Carlo experiments (`seif paper`): sample mean, sample
+// standard deviation, the Student-t quantile and the 95 % confidence interval of a mean.
+#include <cstddef>
+#include <span>
+#include <vector>
+
+namespace seif {
+
+/// Arithmetic mean; NaN for an empty sample.
+double sampleMean(std::span<const double> xs);
+
+/// Sample standard deviation with Bessel's correction (divides by n - 1); 0 for n < 2.
+double sampleStdDev(std::span<const double> xs);
+
+/// Median (the mean of the two middle values for an even count); NaN for an empty sample.
+/// Takes its argument by value: it is partially sorted.
+double median(std::vector<double> xs);
+
+/// Regularized incomplete beta function I_x(a, b) for a, b > 0 and x in [0, 1]
+/// (continued fraction, modified Lentz; absolute accuracy ~1e-14).
+double incompleteBeta(double a, double b, double x);
+
+/// Cumulative distribution function of Student's t with `dof` > 0 degrees of freedom:
+/// F(t) = 1 - I_{dof/(dof+t^2)}(dof/2, 1/2) / 2 for t >= 0, symmetric for t < 0.
+double studentTCdf(double t, double dof);
+
+/// The p-quantile of Student's t with `dof` > 0 degrees of freedom, p in (0, 1): closed
+/// forms for 1 and 2 degrees of freedom, otherwise the inverse of studentTCdf() by
+/// safeguarded Newton/bisection (relative accuracy ~1e-12). Throws std::invalid_argument
+/// outside the domain.
+double studentTQuantile(double p, double dof);
+
+/// Half-width of the two-sided 95 % confidence interval of the mean of an i.i.d. sample:
+/// t_{0.975, n-1} * s / sqrt(n), s = sampleStdDev(). 0 for n < 2 (no interval: undefined).
+double ci95HalfWidth(std::span<const double> xs);
+
+/// Everything the tables print about one sample.
+struct Summary {
+  std::size_t n = 0;
+  double mean = 0.0;
+  double sd = 0.0;    ///< sample standard deviation (n - 1)
+  double ci95 = 0.0;  ///< half-width of the 95 % confidence interval of the mean
+  double min = 0.0;
+  double max = 0.0;
+  double median = 0.0;
+};
+
+Summary summarize(std::span<const double> xs);
+
+}  // namespace seif
