@@ -194,7 +194,7 @@ TEST(PaperCli, FourRunsEndToEnd) {
   EXPECT_TRUE(fs::exists(out2 / "table.md"));
   EXPECT_NE(slurp(out2 / "table.md").find("| EKF |"), std::string::npos);
   EXPECT_FALSE(fs::exists(out2 / "fig1_ekf.png"));  // --no-figures
-  EXPECT_TRUE(fs::exists(out2 / "figure_data" / "run0_ekf.json"));
+  EXPECT_TRUE(fs::exists(out2 / "figure_data" / "ekf.json"));
 
   const auto r2 = nlohmann::json::parse(slurp(out2 / "results.json"));
   const auto r1 = nlohmann::json::parse(slurp(out1 / "results.json"));

@@ -3,7 +3,8 @@
 
 Usage: /usr/bin/python3 scripts/figures/paper.py DIR
 
-Reads DIR/figure_data/run0_{ekf,seif}.json (one run's final state: true and estimated
+Reads DIR/figure_data/{ekf,seif}.json (one typical run's final state -- `seif paper` picks
+the run whose constant-time SEIF has the median final error: true and estimated
 landmarks with 2x2 covariances, true and estimated path, the dense covariance and
 information matrices ordered [x, y, theta, landmarks by id], the links of the information
 matrix) and DIR/results.json, and writes:
@@ -134,13 +135,17 @@ def links_panel(ax, d, title):
     ax.tick_params(labelsize=7)
 
 
+def err(d):
+    return f"final error {1e3 * d['final_error']:.2f}·10⁻³ m²" if "final_error" in d else ""
+
+
 def label(d):
     return {"ekf": "EKF", "seif": "SEIF (constant time)", "seif_exact": "SEIF with exact μ"}[d["filter"]]
 
 
 def fig1(ekf, out):
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.4))
-    map_panel(axes[0], ekf, f"EKF map, 2σ ellipses (seed {ekf['seed']})")
+    map_panel(axes[0], ekf, f"EKF map, 2σ ellipses (seed {ekf['seed']}, {err(ekf)})")
     matrix_panel(axes[1], ekf["covariance"], "correlation matrix |Σij|/√(Σii Σjj)", False)
     matrix_panel(axes[2], ekf["information"],
                  "normalized information matrix |Hij|/√(Hii Hjj)\n(scale: 0 .. largest off-diagonal)",
@@ -148,7 +153,7 @@ def fig1(ekf, out):
     axes[0].legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.06), ncol=3, frameon=False)
     fig.suptitle("Figure 1: EKF SLAM, 50 landmarks (dark = strong)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(out, dpi=130)
+    fig.savefig(out, dpi=130, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -170,14 +175,14 @@ def fig6(ekf, seif, out):
     fig, axes = plt.subplots(2, 4, figsize=(17, 8.6))
     for row, d in enumerate((ekf, seif)):
         name = label(d)
-        map_panel(axes[row, 0], d, f"{name}: final map, 2σ ellipses")
+        map_panel(axes[row, 0], d, f"{name}: final map, 2σ ellipses\n({err(d)})")
         links_panel(axes[row, 1], d, f"{name}: {d['links']} links\n"
                                      f"(red robot–landmark: {len(d['robot_links'])}, "
                                      f"green landmark–landmark: {len(d['landmark_links'])})")
         matrix_panel(axes[row, 2], d["covariance"], f"{name}: correlation matrix", False)
         matrix_panel(axes[row, 3], d["information"], f"{name}: normalized information matrix", True)
-    fig.suptitle(f"Figure 6: EKF (top) vs SEIF (bottom), N = 50, same data (seed {ekf['seed']}); dark = strong",
-                 fontsize=11)
+    fig.suptitle(f"Figure 6: EKF (top) vs SEIF (bottom), N = 50, same data: seed {ekf['seed']}, "
+                 f"the run with the median SEIF error; dark = strong", fontsize=11)
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)
@@ -226,8 +231,8 @@ def main():
         sys.exit(__doc__)
     out = Path(sys.argv[1])
     data = out / "figure_data"
-    ekf = load(data / "run0_ekf.json")
-    seif = load(data / "run0_seif.json")
+    ekf = load(data / "ekf.json")
+    seif = load(data / "seif.json")
     fig1(ekf, out / "fig1_ekf.png")
     fig2(seif, out / "fig2_seif.png")
     fig6(ekf, seif, out / "fig6_compare.png")
