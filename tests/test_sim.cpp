@@ -276,14 +276,14 @@ void expectDetectionsMatchBruteForce(WorldConfig c) {
     const std::size_t k = stepOf(m.time, c.dt);
     const Vec2 d = log.landmarks.at(m.subject) - log.groundtruth[k].pose.head<2>();
     EXPECT_LE(d.norm(), c.sensor_range);
-    EXPECT_GE(d.norm(), 1e-6);
+    EXPECT_GE(d.norm(), std::max(1e-6, c.min_range));
     ++measured[{k, m.subject}];
   }
   std::size_t expected = 0;
   for (std::size_t k = 1; k < log.groundtruth.size(); ++k) {
     for (const auto& [id, y] : log.landmarks) {
       const double r = (y - log.groundtruth[k].pose.head<2>()).norm();
-      if (r <= c.sensor_range && r >= 1e-6) {
+      if (r <= c.sensor_range && r >= std::max(1e-6, c.min_range)) {
         ++expected;
         const auto it = measured.find({k, id});
         EXPECT_TRUE(it != measured.end() && it->second == 1) << "step " << k << " subject " << id;

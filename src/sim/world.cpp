@@ -124,6 +124,8 @@ void validate(const WorldConfig& c) {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   auto sigma = [](double v) { return std::isfinite(v) && v >= 0.0; };
   require(positive(c.sensor_range), got("sensor_range must be positive and finite", c.sensor_range));
+  require(c.min_range >= 0.0 && c.min_range < c.sensor_range,
+          got("min_range must be >= 0 and below sensor_range", c.min_range));
   require(positive(c.dt), got("dt must be positive and finite", c.dt));
   require(positive(c.speed), got("speed must be positive and finite", c.speed));
   require(positive(c.density), got("density must be positive and finite", c.density));
@@ -194,6 +196,7 @@ WorldConfig presetConfig(WorldPreset preset, int landmarks, int steps, std::uint
   c.noise.sigma_range = std::sqrt(0.002);
   c.noise.sigma_bearing = std::sqrt(0.003);
   c.sensor_range = 0.2;
+  c.min_range = 0.05;
   c.dt = 1.0;
   c.density = 50.0;
   c.corridor_width = 0.4;
@@ -290,7 +293,8 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
     st.max_tracking_error = std::max(st.max_tracking_error, (x.head<2>() - ref.head<2>()).norm());
 
     found.clear();
-    const std::size_t checked = grid.query(x.head<2>(), c.sensor_range, kMinDetectionRange, found);
+    const std::size_t checked = grid.query(x.head<2>(), c.sensor_range,
+                                             std::max(kMinDetectionRange, c.min_range), found);
     st.candidates_checked_total += checked;
     st.candidates_checked_max_per_step = std::max(st.candidates_checked_max_per_step, checked);
     st.max_detections_per_step = std::max(st.max_detections_per_step, found.size());
