@@ -8,6 +8,7 @@
 #include <Eigen/LU>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <array>
 #include <sstream>
 
 namespace seif {
@@ -120,6 +121,7 @@ void SeifSlam::gather(const std::vector<int>& order) {
 }
 
 void SeifSlam::scatter(const std::vector<int>& order) {
+  invalidateFactor();  // H and b change
   const int k = static_cast<int>(order.size());
   H_xx_ = local_H_.topLeftCorner<3, 3>();
   b_x_ = local_b_.head<3>();
@@ -176,7 +178,6 @@ void SeifSlam::motionUpdate(const VelocityControl& u) {
   workspace_.resize(6, n);
   informationMotionUpdate(local_H_, local_b_, local_mu_, delta, J_x, U, workspace_);
   scatter(order_);
-  invalidateFactor();
 }
 
 void SeifSlam::relaxRobot() {
@@ -210,13 +211,74 @@ void SeifSlam::relaxLandmark(int slot) {
   blocks_touched_ += 1 + node.links.size() + (node.active >= 0 ? 1 : 0);
 }
 
+void SeifSlam::relaxActiveBlock() {
+  // Block Gauss-Seidel on the robot and the active landmarks jointly (eq. 42 with S_i the
+  // projection onto {x, Y+}): mu_L = H_LL^-1 (b_L - H_{L,rest} mu_rest). The robot is linked
+  // only inside L; each active landmark's links to passive ones move to the right-hand side.
+  order_.clear();
+  for (const RobotLink& l : robot_links_) order_.push_back(l.slot);
+  gather(order_);
+  for (std::size_t i = 0; i < order_.size(); ++i) {
+    const Node& node = nodes_[static_cast<std::size_t>(order_[i])];
+    for (const Link& l : node.links) {
+      const Node& other = nodes_[static_cast<std::size_t>(l.slot)];
+      if (other.active < 0) local_b_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i)).noalias() -= l.H * other.mu;
+    }
+    blocks_touched_ += node.links.size();
+  }
+  Eigen::LLT<LocalMatrix> llt(local_H_);
+  if (llt.info() != Eigen::Success) {
+    throw NumericError("seif: the information of the robot and its active landmarks is not "
+                       "positive definite at step " + std::to_string(step_));
+  }
+  local_mu_ = llt.solve(local_b_);
+  mu_x_ = local_mu_.head<3>();
+  for (std::size_t i = 0; i < order_.size(); ++i) {
+    nodes_[static_cast<std::size_t>(order_[i])].mu = local_mu_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i));
+  }
+}
+
 void SeifSlam::recoverMean() {
   // §2: one block Gauss-Seidel pass over the active landmarks, the robot and K random others.
-  for (const RobotLink& l : robot_links_) relaxLandmark(l.slot);
-  relaxRobot();
-  if (!nodes_.empty()) {
-    std::uniform_int_distribution<int> pick(0, static_cast<int>(nodes_.size()) - 1);
-    for (int k = 0; k < options_.relax; ++k) relaxLandmark(pick(rng_));
+  // In a map much larger than the caches, relaxing a random landmark chases three dependent
+  // pointers, each a cache miss: its node, its links, its neighbours' means. The K landmarks
+  // are therefore drawn first (the same draws in the same order: the result is unchanged)
+  // and their memory prefetched in three rounds, so that their misses overlap instead of
+  // adding up (without this the step time grew ~1.5x from 10^4 to 10^6 landmarks).
+  constexpr int kChunk = 16;
+  std::array<int, kChunk> picks{};
+  std::uniform_int_distribution<int> pick(0, std::max(0, static_cast<int>(nodes_.size()) - 1));
+  const int random = nodes_.empty() ? 0 : options_.relax;
+  auto nodeAt = [this](int slot) -> const Node& { return nodes_[static_cast<std::size_t>(slot)]; };
+  auto draw = [&](int count) {  // round 1: the nodes
+    for (int i = 0; i < count; ++i) {
+      const int slot = pick(rng_);
+      picks[static_cast<std::size_t>(i)] = slot;
+      const char* node = reinterpret_cast<const char*>(&nodeAt(slot));
+      __builtin_prefetch(node);
+      __builtin_prefetch(node + sizeof(Node) - 1);
+    }
+  };
+  auto prefetchLinks = [&](int count) {  // rounds 2 and 3: their links, their neighbours
+    for (int i = 0; i < count; ++i) {
+      const std::vector<Link>& links = nodeAt(picks[static_cast<std::size_t>(i)]).links;
+      const char* begin = reinterpret_cast<const char*>(links.data());
+      const char* end = reinterpret_cast<const char*>(links.data() + links.size());
+      for (const char* p = begin; p < end; p += 64) __builtin_prefetch(p);
+    }
+    for (int i = 0; i < count; ++i) {
+      for (const Link& l : nodeAt(picks[static_cast<std::size_t>(i)]).links) __builtin_prefetch(&nodeAt(l.slot).mu);
+    }
+  };
+  int chunk = std::min(random, kChunk);
+  draw(chunk);
+  relaxActiveBlock();
+  for (int done = 0; done < random;) {
+    prefetchLinks(chunk);
+    for (int i = 0; i < chunk; ++i) relaxLandmark(picks[static_cast<std::size_t>(i)]);
+    done += chunk;
+    chunk = std::min(random - done, kChunk);
+    draw(chunk);
   }
 }
 
@@ -277,7 +339,6 @@ void SeifSlam::sparsify() {
     }
     ranking_.emplace_back(score, l.slot);
   }
-  invalidateFactor();
   std::sort(ranking_.begin(), ranking_.end());  // weakest (or oldest) first
   order_.clear();
   for (int i = drop; i < k; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y+
@@ -300,6 +361,10 @@ void SeifSlam::update(std::span<const Observation> observations) {
     recoverExactMean();  // sparsification then keeps this mean exactly
   } else if (!book_order) {
     recoverMean();
+  } else if (static_cast<int>(robot_links_.size()) > options_.max_active) {
+    // The sparsification's b~ = b + (H~ - H) mu is right only for the exact mean of the
+    // robot and the active landmarks; the measurements just moved it, so re-solve that block.
+    relaxActiveBlock();
   }
   sparsify();
 }

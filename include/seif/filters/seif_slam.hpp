@@ -114,6 +114,7 @@ class SeifSlam final : public SlamFilter {
   void addToLink(int a, int c, const Mat2& H_ac);
   void relaxRobot();
   void relaxLandmark(int slot);
+  void relaxActiveBlock();
   /// Gathers H, b, mu of the robot and the active landmarks listed in `order`
   /// (landmark slots) into the local buffers, and scatters them back.
   void gather(const std::vector<int>& order);
