@@ -1,0 +1,122 @@
+#pragma once
+// The scaling benchmark behind `seif bench` (issue 3, "Benchmark"): time per step and memory
+// of a filter once its map holds N landmarks, on the corridor world (about one new landmark
+// per step, so a run of the whole corridor maps all N), and the cost model that decides
+// which (filter, N) would not fit in memory or time.
+//
+// runBenchCase() measures one case in the calling process; `seif bench` runs each case in a
+// forked child so that the peak memory of one case does not leak into the next.
+#include <seif/filters/seif_slam.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace seif {
+
+/// One (filter, N) of the benchmark.
+struct BenchCase {
+  std::string filter = "seif";  ///< "ekf" | "eif" | "seif"
+  int landmarks = 1000;         ///< N: landmarks of the corridor world
+  /// Steps timed: the last `window` steps of the corridor (at most half of its steps), when
+  /// the map holds N - window .. N landmarks.
+  int window = 200;
+  std::uint64_t seed = 1;  ///< seed of the simulated world
+  SeifOptions seif;        ///< used when filter == "seif"
+};
+
+/// What one case measured. Times in microseconds, memory in MiB (2^20 bytes).
+struct BenchMeasurement {
+  std::string filter;
+  int landmarks = 0;
+  std::size_t steps = 0;           ///< steps timed (the window)
+  std::size_t steps_run = 0;       ///< steps run in all (the whole corridor)
+  std::size_t map_first = 0;       ///< landmarks in the map before the window's first step
+  std::size_t map_last = 0;        ///< landmarks in the map after the last step
+  double us_per_step_median = 0.0;
+  double us_per_step_p90 = 0.0;
+  double us_per_step_mean = 0.0;
+  double us_per_step_max = 0.0;
+  double observations_per_step = 0.0;  ///< mean over the window
+  double sim_seconds = 0.0;            ///< simulate + buildDataset
+  double run_seconds = 0.0;            ///< all filter steps
+  std::size_t max_blocks_touched = 0;  ///< over the window
+  std::size_t max_robot_links = 0;     ///< over the window
+  /// Peak RSS of the process over the whole case (simulator, dataset and filter).
+  double peak_rss_mb = 0.0;
+  /// RSS when the case started (the program itself), and the peak RSS while simulating and
+  /// building the dataset (the log and the dataset both alive).
+  double base_rss_mb = 0.0;
+  double sim_peak_mb = 0.0;
+  /// RSS with the dataset loaded, before the filter was built (the simulator's log freed).
+  double data_rss_mb = 0.0;
+  /// Peak RSS while the filter ran, minus data_rss_mb: the filter's own peak footprint,
+  /// transient copies included. Meaningful only when peak_reset is true.
+  double filter_peak_mb = 0.0;
+  /// RSS after the last step, minus data_rss_mb: the filter's resident footprint.
+  double filter_final_mb = 0.0;
+  /// Whether the kernel let the peak be reset after the dataset was built
+  /// (/proc/self/clear_refs, Linux >= 4.0); without it filter_peak_mb is not isolated.
+  bool peak_reset = false;
+};
+
+/// Simulates the corridor world with c.landmarks landmarks (presetConfig(Corridor, N, 0,
+/// seed)), runs c.filter over all of its steps, each timed with steady_clock, and reports
+/// the window (see BenchCase::window) and the memory. Throws what the filter throws.
+BenchMeasurement runBenchCase(const BenchCase& c);
+
+/// q-quantile (0 <= q <= 1) with linear interpolation between order statistics; 0 if empty.
+double quantile(std::vector<double> values, double q);
+
+/// This process's resident memory now and its peak (VmRSS, VmHWM of /proc/self/status),
+/// in MiB; the peak falls back to getrusage() where /proc is missing.
+struct ProcessMemory {
+  double rss_mb = 0.0;
+  double peak_mb = 0.0;
+};
+ProcessMemory processMemory();
+
+/// Resets the peak (VmHWM) to the current RSS; false when the kernel does not allow it.
+bool resetPeakMemory();
+
+// ---------------------------------------------------------------- cost model ----------
+
+/// How the cost of one step grows with the map: t(N) ~ N^exponent (EKF 2: the dense
+/// covariance update; EIF 3: a Cholesky factorisation of H per update; SEIF 0).
+double stepCostExponent(std::string_view filter);
+
+/// Bytes of the dense n x n matrices (n = 3 + 2N) a dense filter holds at its peak: the
+/// matrix, the copy made when it grows by a landmark, and the factor (EIF) or the
+/// symmetrisation temporary (EKF). 0 for the SEIF.
+double denseMatrixBytes(std::string_view filter, int landmarks);
+
+/// A measured case used to extrapolate: median seconds per step with `landmarks` mapped.
+struct BenchPoint {
+  double landmarks = 0.0;
+  double seconds_per_step = 0.0;
+  double filter_bytes = 0.0;  ///< the filter's peak footprint (0 when unknown)
+  double data_bytes = 0.0;    ///< peak RSS of simulating the case, beyond the program's own
+  double steps = 0.0;         ///< steps of that case's corridor
+};
+
+/// Extrapolated cost of a case from earlier measurements of the same filter (ordered by
+/// landmarks; at least one). The step time follows a power law through the largest
+/// measured case with exponent max(stepCostExponent, the slope between the two largest
+/// cases), capped at stepCostExponent + 1. Building the map up to N over `steps` steps
+/// (the map grows linearly) costs steps * t(N) / (exponent + 1). Memory: the dense matrices,
+/// or the SEIF's measured bytes per landmark, plus the simulation's bytes per step (measured
+/// on a case of at least 10^4 steps, else 1 KiB per step).
+struct BenchEstimate {
+  double exponent = 0.0;
+  double seconds_per_step = 0.0;  ///< at N landmarks
+  double build_seconds = 0.0;     ///< the whole corridor
+  double bytes = 0.0;             ///< peak memory of the case (filter + dataset)
+  double matrix_bytes = 0.0;      ///< of which dense matrices (denseMatrixBytes)
+};
+BenchEstimate estimateBenchCase(std::string_view filter, int landmarks, double steps,
+                                std::span<const BenchPoint> measured);
+
+}  // namespace seif

@@ -1,0 +1,187 @@
+#include <seif/core/errors.hpp>
+#include <seif/eval/bench.hpp>
+#include <seif/eval/run.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/sim/world.hpp>
+
+#include <sys/resource.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace seif {
+namespace {
+
+/// Returns freed heap memory to the kernel, so that RSS measures what is still in use.
+void trimHeap() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+}
+
+}  // namespace
+
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double pos = std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(pos));
+  const std::size_t hi = std::min(lo + 1, values.size() - 1);
+  const double f = pos - static_cast<double>(lo);
+  return (1.0 - f) * values[lo] + f * values[hi];
+}
+
+ProcessMemory processMemory() {
+  ProcessMemory m;
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    std::istringstream s(line);
+    std::string key;
+    double kb = 0.0;
+    s >> key >> kb;
+    if (!s) continue;
+    if (key == "VmRSS:") m.rss_mb = kb / 1024.0;
+    if (key == "VmHWM:") m.peak_mb = kb / 1024.0;
+  }
+  if (m.peak_mb == 0.0) {
+    rusage usage{};
+    if (getrusage(RUSAGE_SELF, &usage) == 0) m.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  }
+  return m;
+}
+
+bool resetPeakMemory() {
+  std::ofstream clear("/proc/self/clear_refs");
+  if (!clear) return false;
+  clear << "5" << std::flush;  // proc(5): "5" resets the peak resident set size
+  return static_cast<bool>(clear);
+}
+
+BenchMeasurement runBenchCase(const BenchCase& c) {
+  if (c.landmarks < 1) throw std::invalid_argument("bench: the number of landmarks must be >= 1");
+  if (c.window < 1) throw std::invalid_argument("bench: the window must be >= 1 step");
+  using Clock = std::chrono::steady_clock;
+  BenchMeasurement m;
+  m.filter = c.filter;
+  m.landmarks = c.landmarks;
+
+  m.base_rss_mb = processMemory().rss_mb;
+  const auto t_sim = Clock::now();
+  const WorldConfig world = presetConfig(WorldPreset::Corridor, c.landmarks, 0, c.seed);
+  Dataset data = buildDataset(simulate(world));  // the log dies here
+  const Pose2 start = startPose(data);
+  data.groundtruth = {};  // keep only what the filter reads
+  data.landmarks = {};
+  trimHeap();
+  m.sim_seconds = std::chrono::duration<double>(Clock::now() - t_sim).count();
+
+  FilterConfig config;
+  config.noise = world.noise;
+  const ProcessMemory before = processMemory();
+  m.data_rss_mb = before.rss_mb;
+  m.sim_peak_mb = before.peak_mb;
+  m.peak_reset = resetPeakMemory();
+
+  const std::size_t total = data.steps.size();
+  const std::size_t window =
+      std::min(static_cast<std::size_t>(c.window), std::max<std::size_t>(1, total / 2));
+  const std::size_t first = total - std::min(window, total);
+  std::vector<double> us;
+  us.reserve(window);
+  std::size_t observations = 0;
+
+  auto filter = makeFilter(c.filter, start, config, c.seif);
+  const auto t_run = Clock::now();
+  for (std::size_t k = 0; k < total; ++k) {
+    const Step& step = data.steps[k];
+    if (k == first) m.map_first = filter->landmarkIds().size();
+    const auto t0 = Clock::now();
+    try {
+      filter->step(step.u, step.observations);
+    } catch (const std::exception& e) {
+      std::ostringstream msg;
+      msg << c.filter << " on the corridor of " << c.landmarks << " landmarks: step " << k << ": "
+          << e.what();
+      throw NumericError(msg.str());
+    }
+    const auto t1 = Clock::now();
+    if (k >= first) {
+      us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+      observations += step.observations.size();
+      m.max_blocks_touched = std::max(m.max_blocks_touched, filter->blocksTouched());
+      m.max_robot_links = std::max(m.max_robot_links, filter->robotLinks());
+    }
+  }
+  m.run_seconds = std::chrono::duration<double>(Clock::now() - t_run).count();
+  m.steps = us.size();
+  m.steps_run = total;
+  m.map_last = filter->landmarkIds().size();
+  if (!us.empty()) {
+    m.us_per_step_median = quantile(us, 0.5);
+    m.us_per_step_p90 = quantile(us, 0.9);
+    m.us_per_step_max = *std::max_element(us.begin(), us.end());
+    double sum = 0.0;
+    for (double v : us) sum += v;
+    m.us_per_step_mean = sum / static_cast<double>(us.size());
+    m.observations_per_step = static_cast<double>(observations) / static_cast<double>(us.size());
+  }
+
+  const ProcessMemory after = processMemory();
+  m.peak_rss_mb = std::max(before.peak_mb, after.peak_mb);
+  m.filter_peak_mb = std::max(0.0, after.peak_mb - m.data_rss_mb);
+  m.filter_final_mb = std::max(0.0, after.rss_mb - m.data_rss_mb);
+  return m;
+}
+
+// ---------------------------------------------------------------- cost model ----------
+
+double stepCostExponent(std::string_view filter) {
+  if (filter == "ekf") return 2.0;
+  if (filter == "eif") return 3.0;
+  if (filter == "seif") return 0.0;
+  throw std::invalid_argument("unknown filter '" + std::string(filter) + "' (expected ekf, eif or seif)");
+}
+
+double denseMatrixBytes(std::string_view filter, int landmarks) {
+  if (stepCostExponent(filter) == 0.0) return 0.0;
+  const double n = 3.0 + 2.0 * static_cast<double>(landmarks);
+  return 3.0 * 8.0 * n * n;
+}
+
+BenchEstimate estimateBenchCase(std::string_view filter, int landmarks, double steps,
+                                std::span<const BenchPoint> measured) {
+  if (measured.empty()) throw std::invalid_argument("estimateBenchCase: needs a measured case");
+  BenchEstimate e;
+  const double p0 = stepCostExponent(filter);
+  const BenchPoint& a = measured.back();
+  e.exponent = p0;
+  if (measured.size() >= 2) {
+    const BenchPoint& b = measured[measured.size() - 2];
+    if (a.landmarks > b.landmarks && a.seconds_per_step > 0.0 && b.seconds_per_step > 0.0) {
+      const double slope = std::log(a.seconds_per_step / b.seconds_per_step) / std::log(a.landmarks / b.landmarks);
+      e.exponent = std::clamp(slope, p0, p0 + 1.0);
+    }
+  }
+  const double n = static_cast<double>(landmarks);
+  e.seconds_per_step = a.seconds_per_step * std::pow(n / std::max(1.0, a.landmarks), e.exponent);
+  e.build_seconds = steps * e.seconds_per_step / (e.exponent + 1.0);
+  e.matrix_bytes = denseMatrixBytes(filter, landmarks);
+  const double filter_bytes = e.matrix_bytes > 0.0 ? e.matrix_bytes
+                              : a.filter_bytes > 0.0 ? a.filter_bytes / std::max(1.0, a.landmarks) * n
+                                                     : 1024.0 * n;
+  const double data_bytes =
+      a.data_bytes > 0.0 && a.steps >= 1e4 ? a.data_bytes / a.steps * steps : 1024.0 * steps;
+  e.bytes = filter_bytes + data_bytes;
+  return e;
+}
+
+}  // namespace seif
