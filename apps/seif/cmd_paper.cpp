@@ -480,7 +480,7 @@ void paperCommand(const PaperArgs& args) {
       {"sensor_range", world.sensor_range},
       {"dt", world.dt},
       {"speed", world.speed},
-      {"path", "figure eight x = 0.5 + 0.35 sin u, y = 0.5 + 0.35 sin 2u in the unit square (docs/simulator.md)"},
+      {"path", "3:2 Lissajous curve x = 0.5 + 0.4 sin 3u, y = 0.5 + 0.4 sin 2u in the unit square (docs/simulator.md)"},
       {"data_association", "known"},
       {"start", "every filter starts at the true start pose with initial pose sigma 1e-3"},
       {"theta_x", options.active},

@@ -80,14 +80,14 @@ PathBuilder& PathBuilder::arc(double radius, double angle) {
 
 ReferencePath PathBuilder::build(bool closed) const { return ReferencePath(v_, closed); }
 
-ReferencePath figureEight(const Vec2& centre, double amplitude, int samples) {
+ReferencePath lissajous(const Vec2& centre, double amplitude, int p, int q, int samples) {
   std::vector<Pose2> v;
   v.reserve(static_cast<std::size_t>(samples));
   for (int i = 0; i < samples; ++i) {
     const double u = 2.0 * kPi * i / samples;
-    v.emplace_back(centre.x() + amplitude * std::sin(u),
-                   centre.y() + amplitude * std::sin(2.0 * u),
-                   std::atan2(2.0 * std::cos(2.0 * u), std::cos(u)));
+    v.emplace_back(centre.x() + amplitude * std::sin(p * u),
+                   centre.y() + amplitude * std::sin(q * u),
+                   std::atan2(q * std::cos(q * u), p * std::cos(p * u)));
   }
   return ReferencePath(std::move(v), true);
 }

@@ -40,9 +40,9 @@ class PathBuilder {
   std::vector<Pose2> v_;
 };
 
-/// Figure eight x = cx + a sin u, y = cy + a sin 2u (a 1:2 Lissajous curve), starting at
-/// the centre (u = 0) and sampled at `samples` parameter values.
-ReferencePath figureEight(const Vec2& centre, double amplitude, int samples = 4096);
+/// Lissajous curve x = cx + a sin(p u), y = cy + a sin(q u) (p = 1, q = 2 is a figure
+/// eight), starting at the centre (u = 0) and sampled at `samples` parameter values.
+ReferencePath lissajous(const Vec2& centre, double amplitude, int p, int q, int samples = 4096);
 
 /// Closed boustrophedon ("lawnmower") loop through the square [0, side]^2 (see
 /// docs/simulator.md): an even number of lanes parallel to y, at most `max_spacing` apart,

@@ -18,7 +18,7 @@ namespace seif {
 
 /// The worlds the simulator knows (docs/simulator.md "Presets").
 enum class WorldPreset {
-  Paper,     ///< Thrun et al. 2002: landmarks uniform in the unit square, figure-eight path
+  Paper,     ///< Thrun et al. 2002: landmarks uniform in the unit square, 3:2 Lissajous path
   Uniform,   ///< the paper's density and sensor in a square of side sqrt(N / 50), lawnmower loop
   Corridor,  ///< a straight strip at the paper's density, driven once: the map grows steadily
 };
