@@ -2,6 +2,7 @@
 // bounded by a constant that is the same at 10^2 and 10^5 landmarks. Both maps come from the
 // corridor world (about one new landmark per step, the paper's density and sensor), driven
 // to the end, so the 10^5 run ends with ~97,700 landmarks mapped.
+#include <seif/eval/bench.hpp>
 #include <seif/eval/run.hpp>
 #include <seif/filters/seif_slam.hpp>
 #include <seif/sim/world.hpp>
@@ -118,4 +119,61 @@ TEST(SeifScaling, BlocksTouchedPerStepAreBoundedByTheSameConstantAt100And100000L
   // and the small run's maximum is itself taken over only 80 steps. Hence a factor of 2;
   // anything that grew with N (even like sqrt(N)) would put the maxima ~30x apart.
   EXPECT_LE(static_cast<double>(large.max_blocks_same_m), 2.0 * static_cast<double>(small.max_blocks));
+}
+
+// The library part of `seif bench`: one case measured in this process, and the cost model
+// that decides which cases to skip.
+TEST(SeifScaling, BenchCaseTimesTheEndOfTheCorridor) {
+  BenchCase c;
+  c.filter = "seif";
+  c.landmarks = 600;
+  c.window = 200;
+  const BenchMeasurement m = runBenchCase(c);
+  EXPECT_EQ(m.steps, 200u);  // the last 200 of the corridor's 600 steps
+  EXPECT_EQ(m.steps_run, 600u);
+  EXPECT_GT(m.map_first, 350u);
+  EXPECT_GT(m.map_last, 550u);
+  EXPECT_LE(m.map_first, m.map_last);
+  EXPECT_GT(m.us_per_step_median, 0.0);
+  EXPECT_GE(m.us_per_step_p90, m.us_per_step_median);
+  EXPECT_GE(m.us_per_step_max, m.us_per_step_p90);
+  EXPECT_GT(m.peak_rss_mb, 0.0);
+  EXPECT_LE(m.max_robot_links, 6u);
+  EXPECT_GT(m.max_blocks_touched, 0u);
+
+  c.landmarks = 60;  // a corridor shorter than twice the window: half of it is timed
+  EXPECT_EQ(runBenchCase(c).steps, 30u);
+  c.filter = "nope";
+  EXPECT_THROW(runBenchCase(c), std::invalid_argument);
+}
+
+TEST(SeifScaling, BenchCostModel) {
+  EXPECT_DOUBLE_EQ(quantile({3.0, 1.0, 2.0, 4.0}, 0.5), 2.5);
+  EXPECT_DOUBLE_EQ(quantile({5.0}, 0.9), 5.0);
+  EXPECT_DOUBLE_EQ(quantile({}, 0.5), 0.0);
+  EXPECT_DOUBLE_EQ(denseMatrixBytes("seif", 1000), 0.0);
+  EXPECT_DOUBLE_EQ(denseMatrixBytes("ekf", 10000), 3.0 * 8.0 * 20003.0 * 20003.0);  // 9.6 GB
+
+  // EKF: 100 us per step at 100 landmarks -> 10 ms at 1000 (N^2); the map grows linearly
+  // over 1000 steps, so building it costs 1000 * 10 ms / 3.
+  const BenchPoint ekf100{100.0, 100e-6, 0.0, 0.0, 100.0};
+  const BenchEstimate e = estimateBenchCase("ekf", 1000, 1000.0, std::span(&ekf100, 1));
+  EXPECT_DOUBLE_EQ(e.exponent, 2.0);
+  EXPECT_NEAR(e.seconds_per_step, 10e-3, 1e-12);
+  EXPECT_NEAR(e.build_seconds, 10.0 / 3.0, 1e-9);
+  EXPECT_NEAR(e.matrix_bytes, 3.0 * 8.0 * 2003.0 * 2003.0, 1.0);
+
+  // A measured slope steeper than the theory is used, capped at the theory + 1.
+  const BenchPoint two[] = {{100.0, 1e-4, 0, 0, 100}, {1000.0, 1e-1, 0, 0, 1000}};  // slope 3
+  EXPECT_NEAR(estimateBenchCase("ekf", 10000, 1e4, two).exponent, 3.0, 1e-12);
+  const BenchPoint steep[] = {{100.0, 1e-6, 0, 0, 100}, {1000.0, 1e-1, 0, 0, 1000}};  // slope 5
+  EXPECT_NEAR(estimateBenchCase("ekf", 10000, 1e4, steep).exponent, 3.0, 1e-12);
+
+  // SEIF: constant time; memory from the measured bytes per landmark.
+  const BenchPoint seif[] = {{1e5, 10e-6, 1e5 * 1100.0, 1e5 * 700.0, 1e5}};
+  const BenchEstimate s = estimateBenchCase("seif", 1000000, 1e6, seif);
+  EXPECT_DOUBLE_EQ(s.seconds_per_step, 10e-6);
+  EXPECT_NEAR(s.build_seconds, 10.0, 1e-9);
+  EXPECT_NEAR(s.bytes, 1e6 * (1100.0 + 700.0), 1.0);
+  EXPECT_THROW(estimateBenchCase("seif", 10, 10.0, {}), std::invalid_argument);
 }

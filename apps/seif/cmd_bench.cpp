@@ -76,8 +76,10 @@ nlohmann::json machineJson() {
                                : nlohmann::json(std::round(std::stod(mem) / (1024.0 * 1024.0) * 10.0) / 10.0);
   utsname u{};
   if (uname(&u) == 0) m["kernel"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
-#if defined(__VERSION__)
-  m["compiler"] = __VERSION__;
+#if defined(__clang__)
+  m["compiler"] = std::string("clang ") + __clang_version__;
+#elif defined(__GNUC__)
+  m["compiler"] = std::string("gcc ") + __VERSION__;
 #endif
 #if defined(NDEBUG)
   m["build"] = "optimised (NDEBUG)";
@@ -222,8 +224,10 @@ Outcome runIsolated(const BenchCase& c, unsigned timeout_seconds) {
 
 /// Runs a case `repeat` times, each in its own child, and keeps the run with the lowest
 /// median: interference from other processes only ever slows a run down, so the fastest
-/// run is the closest to the filter's own cost. All medians are kept for bench.json; the
-/// peak memory is the largest of all runs.
+/// run is the closest to the filter's own cost. A case whose corridor is too short for the
+/// whole window (N < 2 window) runs proportionally more often, so that every case times
+/// about repeat x window steps. All medians are kept for bench.json; the peak memory is the
+/// largest of all runs.
 struct Repeated {
   Outcome best;
   std::vector<double> medians;
@@ -231,11 +235,16 @@ struct Repeated {
 Repeated runRepeated(const BenchCase& c, int repeat, unsigned timeout_seconds) {
   Repeated r;
   double peak = 0.0;
-  for (int i = 0; i < repeat; ++i) {
+  int runs = repeat;
+  for (int i = 0; i < runs; ++i) {
     Outcome o = runIsolated(c, timeout_seconds);
     if (!o.measurement) {
       if (!r.best.measurement) r.best = o;
       break;
+    }
+    if (i == 0 && o.measurement->steps > 0) {
+      const auto timed = static_cast<int>(o.measurement->steps);
+      runs = repeat * ((c.window + timed - 1) / timed);
     }
     r.medians.push_back(o.measurement->us_per_step_median);
     peak = std::max(peak, o.measurement->peak_rss_mb);
@@ -255,12 +264,13 @@ std::string fmt(const char* format, double v) {
   return buf;
 }
 
-/// The reason to skip a case, or nothing when its estimate is within the budget.
-std::optional<std::string> skipReason(const std::string& filter, int n, const BenchEstimate& e,
+/// The reason to skip a case, or nothing when its estimate is within the budget. The time
+/// budget is for all `runs` of the case.
+std::optional<std::string> skipReason(const std::string& filter, int n, const BenchEstimate& e, int runs,
                                       const BenchArgs& args) {
   const double gb = e.bytes / 1e9;
   const bool too_big = gb > args.max_memory_gb;
-  const bool too_slow = e.build_seconds > args.max_seconds;
+  const bool too_slow = runs * e.build_seconds > args.max_seconds;
   if (!too_big && !too_slow) return std::nullopt;
   const std::string N = std::to_string(n);
   std::string what;
@@ -282,6 +292,7 @@ std::optional<std::string> skipReason(const std::string& filter, int n, const Be
   const std::string time = "~O(N^" + fmt("%.2g", e.exponent) + ") per step: estimated " +
                            fmt("%.2g", e.seconds_per_step) + " s/step, " + fmt("%.2g", e.build_seconds) +
                            " s to map them" +
+                           (runs > 1 ? ", x" + std::to_string(runs) + " runs" : std::string()) +
                            (too_slow ? " (budget " + fmt("%g", args.max_seconds) + " s)" : "");
   return what + " needs " + memory + " and " + time;
 }
@@ -456,7 +467,9 @@ void bench(const BenchArgs& args) {
       std::optional<BenchEstimate> estimate;
       if (!points.empty()) {
         estimate = estimateBenchCase(filter, n, steps, points);
-        if (auto why = skipReason(filter, n, *estimate, args)) {
+        const int timed = static_cast<int>(std::min<double>(args.window, std::max(1.0, std::floor(steps / 2))));
+        const int runs = args.repeat * ((args.window + timed - 1) / timed);
+        if (auto why = skipReason(filter, n, *estimate, runs, args)) {
           results.push_back({{"filter", filter},
                              {"landmarks", n},
                              {"us_per_step_median", nullptr},

@@ -51,7 +51,7 @@ def main(argv):
     fig, (ax_t, ax_m) = plt.subplots(1, 2, figsize=(11, 4.4))
     all_n = [r["landmarks"] for r in results]
     skipped_any = False
-    for f in filters:
+    for i, f in enumerate(filters):
         style = dict(STYLE.get(f, dict(marker="o", label=f)))
         label = style.pop("label")
         done = sorted((r for r in results if r["filter"] == f and "skipped" not in r),
@@ -69,9 +69,10 @@ def main(argv):
                 ax_m.plot([p[0] for p in per], [p[1] for p in per], label=label, **style)
         if skipped:
             skipped_any = True
-            ax_t.plot([r["landmarks"] for r in skipped], [1.0] * len(skipped), linestyle="none",
-                      marker="x", markersize=9, color=style.get("color"),
-                      transform=ax_t.get_xaxis_transform(), clip_on=False)
+            # one row of x per filter, just below the top of the axis
+            ax_t.plot([r["landmarks"] for r in skipped], [0.96 - 0.05 * i] * len(skipped),
+                      linestyle="none", marker="x", markersize=8, color=style.get("color"),
+                      transform=ax_t.get_xaxis_transform())
 
     for ax in (ax_t, ax_m):
         ax.set_xscale("log")
@@ -85,7 +86,7 @@ def main(argv):
     if skipped_any:
         title += "  (x: skipped, over the budget)"
     ax_t.set_title(title, fontsize=10)
-    ax_t.legend(fontsize=8, loc="upper left")
+    ax_t.legend(fontsize=8, loc="center right")
     ax_m.set_ylabel("filter peak memory per landmark [bytes]")
     ax_m.set_title("memory per landmark", fontsize=10)
     ax_m.legend(fontsize=8, loc="upper left")
