@@ -28,16 +28,11 @@
 #include <thread>
 #include <vector>
 
-#ifndef SEIF_FIGURE_SCRIPT_DIR
-#define SEIF_FIGURE_SCRIPT_DIR "scripts"
-#endif
-
 namespace seif::cli {
 namespace {
 
 constexpr int kCalibrationLandmarks = 100;  // a dense filter's first case beyond 2x this is
                                             // extrapolated from a calibration run at this N
-constexpr const char* kPython = "/usr/bin/python3";
 
 struct BenchArgs {
   std::vector<std::string> filters = {"ekf", "eif", "seif"};
@@ -328,40 +323,6 @@ void printSkipped(const std::string& filter, int n, const std::string& why) {
   std::fflush(stdout);
 }
 
-/// Runs scripts/figures/bench.py; prints how to render later when Python or matplotlib is
-/// missing. Never fails the command: bench.json is the result.
-void renderFigure(const std::filesystem::path& json, const std::filesystem::path& png) {
-  const std::string script = std::string(SEIF_FIGURE_SCRIPT_DIR) + "/figures/bench.py";
-  const std::string later = "render it later with: python3 " + script + " " + json.string() + " " + png.string();
-  if (access(kPython, X_OK) != 0 || access(script.c_str(), R_OK) != 0) {
-    std::printf("figure: %s or %s not found; %s\n", kPython, script.c_str(), later.c_str());
-    return;
-  }
-  std::fflush(stdout);
-  std::fflush(stderr);
-  const pid_t pid = fork();
-  if (pid < 0) {
-    std::printf("figure: fork() failed; %s\n", later.c_str());
-    return;
-  }
-  if (pid == 0) {
-    const std::string j = json.string(), p = png.string();
-    execl(kPython, kPython, script.c_str(), j.c_str(), p.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  if (code == 0) {
-    std::printf("wrote %s\n", png.string().c_str());
-  } else if (code == 3) {
-    std::printf("figure: matplotlib is not installed for %s; %s\n", kPython, later.c_str());
-  } else {
-    std::printf("figure: %s failed (exit %d); %s\n", script.c_str(), code, later.c_str());
-  }
-}
-
 const BenchMeasurement* find(const std::vector<BenchMeasurement>& all, const std::string& filter, int n) {
   for (const BenchMeasurement& m : all) {
     if (m.filter == filter && m.landmarks == n) return &m;
@@ -530,7 +491,9 @@ void bench(const BenchArgs& args) {
   writeJson(json.string(), doc);
   std::printf("wrote %s\n", json.string().c_str());
   if (args.no_figure) return;
-  renderFigure(json, dir / "bench.png");
+  if (renderFigure("bench.py", {json.string(), (dir / "bench.png").string()})) {
+    std::printf("wrote %s\n", (dir / "bench.png").string().c_str());
+  }
 }
 
 }  // namespace

@@ -240,34 +240,6 @@ nlohmann::json figureData(const SlamFilter& filter, const RunOutput& out, const 
   return j;
 }
 
-std::string shellQuote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-/// Runs scripts/figures/paper.py on `dir`. Missing Python or matplotlib is not an error:
-/// says how to render later. Returns whether the figures were rendered.
-bool renderFigures(const fs::path& dir) {
-  const fs::path script = fs::path(SEIF_FIGURE_SCRIPT_DIR) / "figures" / "paper.py";
-  const std::string python = "/usr/bin/python3";
-  const std::string later = "/usr/bin/python3 " + script.string() + " " + dir.string();
-  if (!fs::exists(python) || !fs::exists(script) ||
-      std::system((python + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0) {
-    std::printf("figures: not rendered (needs /usr/bin/python3 with matplotlib: apt-get install "
-                "python3-matplotlib); render later with: %s\n",
-                later.c_str());
-    return false;
-  }
-  const std::string cmd = python + " " + shellQuote(script.string()) + " " + shellQuote(dir.string());
-  if (std::system(cmd.c_str()) != 0) {
-    std::printf("figures: %s failed (see above); the data is in %s/figure_data\n", later.c_str(),
-                dir.string().c_str());
-    return false;
-  }
-  return true;
-}
-
 void paperCommand(const PaperArgs& args) {
   PaperOptions options;
   options.sweep_active = args.sweep_active;
@@ -630,7 +602,7 @@ void paperCommand(const PaperArgs& args) {
               args.out.c_str(), args.out.c_str());
   std::printf("figure data: %s\n", selection.c_str());
   if (!args.no_figures) {
-    if (renderFigures(dir)) {
+    if (renderFigure("paper.py", {dir.string()})) {
       std::printf("figures: %s/fig1_ekf.png, fig2_seif.png, fig6_compare.png%s\n", args.out.c_str(),
                   args.sweep_active.empty() ? "" : ", sweep_active.png");
     }

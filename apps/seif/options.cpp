@@ -2,7 +2,10 @@
 
 #include <seif/core/errors.hpp>
 
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <cerrno>
 
 #include <cmath>
 #include <cstdio>
@@ -121,6 +124,55 @@ void Progress::operator()(std::size_t done, std::size_t total) {
 
 Progress::~Progress() {
   if (drawn_) std::fprintf(stderr, "\n");
+}
+
+namespace {
+
+/// Runs `argv` (argv[0] an absolute path) without a shell; its exit status, or -1.
+int runProgram(std::vector<std::string> argv, bool quiet) {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const pid_t pid = fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    if (quiet) {
+      std::freopen("/dev/null", "w", stdout);
+      std::freopen("/dev/null", "w", stderr);
+    }
+    std::vector<char*> cargs;
+    for (std::string& a : argv) cargs.push_back(a.data());
+    cargs.push_back(nullptr);
+    execv(cargs[0], cargs.data());
+    _exit(127);
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace
+
+bool renderFigure(const std::string& script, const std::vector<std::string>& args) {
+  const std::string python = "/usr/bin/python3";
+  const std::string path = std::string(SEIF_FIGURE_SCRIPT_DIR) + "/figures/" + script;
+  std::vector<std::string> argv = {python, path};
+  argv.insert(argv.end(), args.begin(), args.end());
+  std::string later;
+  for (const std::string& a : argv) later += (later.empty() ? "" : " ") + a;
+  if (access(python.c_str(), X_OK) != 0 || access(path.c_str(), R_OK) != 0 ||
+      runProgram({python, "-c", "import matplotlib"}, true) != 0) {
+    std::printf("figures: not rendered (needs %s with matplotlib: apt-get install "
+                "python3-matplotlib); render later with: %s\n",
+                python.c_str(), later.c_str());
+    return false;
+  }
+  const int code = runProgram(argv, false);
+  if (code != 0) {
+    std::printf("figures: `%s` failed (exit %d)\n", later.c_str(), code);
+    return false;
+  }
+  return true;
 }
 
 void writeJson(const std::string& file, const nlohmann::json& j) {

@@ -8,6 +8,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace seif::cli {
 
@@ -51,6 +52,11 @@ class Progress {
   bool tty_;
   bool drawn_ = false;
 };
+
+/// Runs scripts/figures/<script> with Debian's /usr/bin/python3 (which has matplotlib) on
+/// `args`. Missing Python or matplotlib is not an error: prints how to render later.
+/// Returns whether the script ran and succeeded.
+bool renderFigure(const std::string& script, const std::vector<std::string>& args);
 
 /// Writes `j` (pretty-printed) to `file`, creating its folder.
 void writeJson(const std::string& file, const nlohmann::json& j);
