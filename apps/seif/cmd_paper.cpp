@@ -462,8 +462,8 @@ void paperCommand(const PaperArgs& args) {
       {"mean_rules",
        {{"ekf", "EKF mean (dense covariance)"},
         {"seif_exact", "exact mean: sparse Cholesky solve of H mu = b after every measurement update"},
-        {"seif", "amortised coordinate descent (paper eq. 42): robot, active landmarks and K random "
-                 "landmarks per step, relaxed " +
+        {"seif", "amortised coordinate descent (paper eq. 42): robot and active landmarks jointly, "
+                 "and K random landmarks per step, relaxed " +
                      std::string(specs[2].seif.recovery == SeifOptions::Recovery::BeforeMeasurement
                                      ? "before the measurement update (the book's order)"
                                      : "after the measurement update")}}},

@@ -71,6 +71,11 @@ void SeifFlags::add(CLI::App& cmd) {
                  "or after it; see docs/seif.md")
       ->check(CLI::IsMember({"after-update", "before-update"}))
       ->capture_default_str();
+  cmd.add_option("--relax-order", relax_order,
+                 "SEIF: the K relaxed landmarks are taken cyclically in map order, or drawn at random "
+                 "(the paper; slower in huge maps: cache misses)")
+      ->check(CLI::IsMember({"random", "cyclic"}))
+      ->capture_default_str();
   cmd.add_option("--seed", seed, "SEIF: seed of the random choice of relaxed landmarks")
       ->capture_default_str();
 }
@@ -82,6 +87,7 @@ SeifOptions SeifFlags::resolve() const {
   o.mean = SeifOptions::parseMean(mean);
   o.deactivate = SeifOptions::parseDeactivate(deactivate);
   o.recovery = SeifOptions::parseRecovery(recovery);
+  o.relax_order = SeifOptions::parseRelaxOrder(relax_order);
   o.seed = seed;
   return o;
 }
@@ -99,6 +105,7 @@ nlohmann::json toJson(const SeifOptions& o) {
           {"mean", o.mean == SeifOptions::Mean::Exact ? "exact" : "amortized"},
           {"deactivate", o.deactivate == SeifOptions::Deactivate::Oldest ? "oldest" : "weakest"},
           {"recovery", o.recovery == SeifOptions::Recovery::BeforeMeasurement ? "before-update" : "after-update"},
+          {"relax_order", o.relax_order == SeifOptions::RelaxOrder::Cyclic ? "cyclic" : "random"},
           {"seed", o.seed}};
 }
 

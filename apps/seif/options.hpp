@@ -31,6 +31,7 @@ struct SeifFlags {
   std::string mean = "amortized";
   std::string deactivate = "weakest";
   std::string recovery = "before-update";
+  std::string relax_order = "cyclic";
   std::uint64_t seed = 1;
   void add(CLI::App& cmd);
   SeifOptions resolve() const;

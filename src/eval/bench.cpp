@@ -175,9 +175,16 @@ BenchEstimate estimateBenchCase(std::string_view filter, int landmarks, double s
   e.seconds_per_step = a.seconds_per_step * std::pow(n / std::max(1.0, a.landmarks), e.exponent);
   e.build_seconds = steps * e.seconds_per_step / (e.exponent + 1.0);
   e.matrix_bytes = denseMatrixBytes(filter, landmarks);
-  const double filter_bytes = e.matrix_bytes > 0.0 ? e.matrix_bytes
-                              : a.filter_bytes > 0.0 ? a.filter_bytes / std::max(1.0, a.landmarks) * n
-                                                     : 1024.0 * n;
+  // Memory of a sparse filter: the marginal bytes per landmark between the last two measured
+  // cases (fixed overheads cancel), else the last case's average (conservative at small N).
+  double per_landmark = a.filter_bytes > 0.0 ? a.filter_bytes / std::max(1.0, a.landmarks) : 1024.0;
+  if (measured.size() >= 2) {
+    const BenchPoint& b = measured[measured.size() - 2];
+    if (a.landmarks > b.landmarks && a.filter_bytes > b.filter_bytes && b.filter_bytes > 0.0) {
+      per_landmark = (a.filter_bytes - b.filter_bytes) / (a.landmarks - b.landmarks);
+    }
+  }
+  const double filter_bytes = e.matrix_bytes > 0.0 ? e.matrix_bytes : per_landmark * n;
   const double data_bytes =
       a.data_bytes > 0.0 && a.steps >= 1e4 ? a.data_bytes / a.steps * steps : 1024.0 * steps;
   e.bytes = filter_bytes + data_bytes;

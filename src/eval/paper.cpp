@@ -21,6 +21,7 @@ std::vector<PaperFilterSpec> paperFilters(const PaperOptions& options) {
   seif.max_active = options.active;
   seif.relax = options.relax;
   seif.deactivate = SeifOptions::Deactivate::Weakest;  // the paper's rule
+  seif.relax_order = SeifOptions::RelaxOrder::Random;  // the paper: K random landmarks
 
   PaperFilterSpec exact;
   exact.name = "seif_exact";

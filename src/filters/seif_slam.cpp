@@ -34,6 +34,13 @@ SeifOptions::Recovery SeifOptions::parseRecovery(std::string_view s) {
                               "' (expected after-update or before-update)");
 }
 
+SeifOptions::RelaxOrder SeifOptions::parseRelaxOrder(std::string_view s) {
+  if (s == "random") return RelaxOrder::Random;
+  if (s == "cyclic") return RelaxOrder::Cyclic;
+  throw std::invalid_argument("unknown relaxation order '" + std::string(s) +
+                              "' (expected random or cyclic)");
+}
+
 struct SeifSlam::Factor {
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt;
 };
@@ -253,7 +260,9 @@ void SeifSlam::recoverMean() {
   auto nodeAt = [this](int slot) -> const Node& { return nodes_[static_cast<std::size_t>(slot)]; };
   auto draw = [&](int count) {  // round 1: the nodes
     for (int i = 0; i < count; ++i) {
-      const int slot = pick(rng_);
+      const int slot = options_.relax_order == SeifOptions::RelaxOrder::Cyclic
+                           ? static_cast<int>(relax_cursor_++ % nodes_.size())
+                           : pick(rng_);
       picks[static_cast<std::size_t>(i)] = slot;
       const char* node = reinterpret_cast<const char*>(&nodeAt(slot));
       __builtin_prefetch(node);
