@@ -16,20 +16,10 @@ EifSlam::EifSlam(const Pose2& initial_pose, const FilterConfig& config)
   b_ = H_ * mu_;
 }
 
-int EifSlam::slotOf(int id) const {
-  const int s = index_.find(id);
-  if (s < 0) throw std::out_of_range("eif: landmark " + std::to_string(id) + " is not in the map");
-  return s;
-}
-
-Pose2 EifSlam::pose() const {
-  Pose2 x = mu_.head<3>();
-  x.z() = wrapAngle(x.z());
-  return x;
-}
+Pose2 EifSlam::pose() const { return wrapHeading(Pose2(mu_.head<3>())); }
 
 Vec2 EifSlam::landmark(int id) const {
-  return mu_.segment<2>(LandmarkIndex::stateIndex(slotOf(id)));
+  return mu_.segment<2>(LandmarkIndex::stateIndex(index_.require(id, "eif")));
 }
 
 const Eigen::LLT<Eigen::MatrixXd>& EifSlam::factor() const {
@@ -52,7 +42,7 @@ Mat3 EifSlam::poseCovariance() const {
 }
 
 Mat2 EifSlam::landmarkCovariance(int id) const {
-  const int i = LandmarkIndex::stateIndex(slotOf(id));
+  const int i = LandmarkIndex::stateIndex(index_.require(id, "eif"));
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(H_.rows(), 2);
   E.middleRows<2>(i).setIdentity();
   return factor().solve(E).middleRows<2>(i);

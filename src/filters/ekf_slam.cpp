@@ -15,24 +15,14 @@ EkfSlam::EkfSlam(const Pose2& initial_pose, const FilterConfig& config)
   sigma_.diagonal() = config.initial_pose_sigma.cwiseAbs2();
 }
 
-int EkfSlam::slotOf(int id) const {
-  const int s = index_.find(id);
-  if (s < 0) throw std::out_of_range("ekf: landmark " + std::to_string(id) + " is not in the map");
-  return s;
-}
-
-Pose2 EkfSlam::pose() const {
-  Pose2 x = mu_.head<3>();
-  x.z() = wrapAngle(x.z());
-  return x;
-}
+Pose2 EkfSlam::pose() const { return wrapHeading(Pose2(mu_.head<3>())); }
 
 Vec2 EkfSlam::landmark(int id) const {
-  return mu_.segment<2>(LandmarkIndex::stateIndex(slotOf(id)));
+  return mu_.segment<2>(LandmarkIndex::stateIndex(index_.require(id, "ekf")));
 }
 
 Mat2 EkfSlam::landmarkCovariance(int id) const {
-  const int i = LandmarkIndex::stateIndex(slotOf(id));
+  const int i = LandmarkIndex::stateIndex(index_.require(id, "ekf"));
   return sigma_.block<2, 2>(i, i);
 }
 

@@ -64,12 +64,6 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
 
 SeifSlam::~SeifSlam() = default;
 
-int SeifSlam::slotOf(int id) const {
-  const int s = index_.find(id);
-  if (s < 0) throw std::out_of_range("seif: landmark " + std::to_string(id) + " is not in the map");
-  return s;
-}
-
 void SeifSlam::invalidateFactor() { factor_.reset(); }
 
 // ---------------------------------------------------------------- block store ----------
@@ -447,13 +441,9 @@ Eigen::MatrixXd SeifSlam::covariance() const {
   return llt.solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
 }
 
-Pose2 SeifSlam::pose() const {
-  Pose2 x = mu_x_;
-  x.z() = wrapAngle(x.z());
-  return x;
-}
+Pose2 SeifSlam::pose() const { return wrapHeading(Pose2(mu_x_)); }
 
-Vec2 SeifSlam::landmark(int id) const { return nodes_[static_cast<std::size_t>(slotOf(id))].mu; }
+Vec2 SeifSlam::landmark(int id) const { return nodes_[static_cast<std::size_t>(index_.require(id, "seif"))].mu; }
 
 Mat3 SeifSlam::poseCovariance() const {
   exactMean();  // builds the factor
@@ -463,7 +453,7 @@ Mat3 SeifSlam::poseCovariance() const {
 }
 
 Mat2 SeifSlam::landmarkCovariance(int id) const {
-  const int i = LandmarkIndex::stateIndex(slotOf(id));
+  const int i = LandmarkIndex::stateIndex(index_.require(id, "seif"));
   exactMean();
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(3 + 2 * index_.size(), 2);
   E.middleRows<2>(i).setIdentity();

@@ -10,4 +10,11 @@ inline double wrapAngle(double a) {
   return a <= -std::numbers::pi ? a + 2.0 * std::numbers::pi : a;
 }
 
+/// The pose with its heading wrapped (filters keep the heading unwrapped internally).
+template <typename Vector3>
+Vector3 wrapHeading(Vector3 x) {
+  x.z() = wrapAngle(x.z());
+  return x;
+}
+
 }  // namespace seif

@@ -37,7 +37,6 @@ class EifSlam final : public SlamFilter {
   const Eigen::VectorXd& informationVector() const { return b_; }
 
  private:
-  int slotOf(int id) const;
   void recoverMean();
   const Eigen::LLT<Eigen::MatrixXd>& factor() const;
 

@@ -36,7 +36,6 @@ class EkfSlam final : public SlamFilter {
 
  private:
   void addLandmark(const Observation& z);
-  int slotOf(int id) const;
 
   FilterConfig config_;
   LandmarkIndex index_;

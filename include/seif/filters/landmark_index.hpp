@@ -1,5 +1,7 @@
 #pragma once
 // Landmark id <-> slot in the state vector, in order of first sight.
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -11,6 +13,15 @@ class LandmarkIndex {
   int find(int id) const {
     const auto it = slot_.find(id);
     return it == slot_.end() ? -1 : it->second;
+  }
+  /// Slot of `id`; throws std::out_of_range naming `filter` when it is not in the map.
+  int require(int id, const char* filter) const {
+    const int s = find(id);
+    if (s < 0) {
+      throw std::out_of_range(std::string(filter) + ": landmark " + std::to_string(id) +
+                              " is not in the map");
+    }
+    return s;
   }
   /// Adds `id` (which must be new) and returns its slot.
   int add(int id) {

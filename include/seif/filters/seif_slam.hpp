@@ -116,7 +116,6 @@ class SeifSlam final : public SlamFilter {
     std::vector<Link> links;
   };
 
-  int slotOf(int id) const;
   Mat2* findLink(int a, int c);
   void addToLink(int a, int c, const Mat2& H_ac);
   void relaxRobot();
