@@ -225,7 +225,12 @@ TEST(PaperCli, FourRunsEndToEnd) {
     for (std::size_t r = 0; r < 4; ++r) {
       EXPECT_EQ(j["per_run"][r]["error"], r1["filters"][f]["per_run"][r]["error"]);
       EXPECT_EQ(j["per_run"][r]["seed"], 11 + r);
+      // The best rigid alignment includes the identity: it can only lower the error.
+      const double shape = j["per_run"][r]["aligned_error"].get<double>();
+      EXPECT_GT(shape, 0.0);
+      EXPECT_LE(shape, j["per_run"][r]["error"].get<double>() * (1.0 + 1e-12));
     }
+    EXPECT_LE(j["aligned_error_mean"].get<double>(), j["error_mean"].get<double>());
   }
   // Per run: the EKF's information matrix is the full graph of its n mapped landmarks and
   // the robot, n(n+1)/2 links; the SEIFs keep at most half of that.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 namespace seif {
@@ -99,6 +100,8 @@ PaperRun runPaperExperiment(std::uint64_t seed, const PaperOptions& options,
     r.name = spec.name;
     r.mse = landmarkMse(*filter, data.landmarks, &r.mapped);
     r.rmse = std::sqrt(r.mse);
+    const std::optional<double> shape = landmarkRmse(*filter, data.landmarks, Alignment::Rigid);
+    r.aligned_mse = shape ? *shape * *shape : std::numeric_limits<double>::quiet_NaN();
     r.pose_error = (filter->pose().head<2>() - true_end.head<2>()).norm();
     r.stats = out.final_stats;
     r.step_seconds = out.step_seconds;

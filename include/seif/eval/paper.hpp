@@ -59,6 +59,9 @@ struct PaperFilterResult {
   std::string name;
   double mse = 0.0;         ///< landmarkMse() after the last step [m^2]
   double rmse = 0.0;        ///< sqrt(mse) [m]
+  /// The map's shape error: mse after the best rigid 2-D alignment of the mapped landmarks
+  /// to the truth (landmarkRmse(Alignment::Rigid) squared) [m^2]; <= mse.
+  double aligned_mse = 0.0;
   double pose_error = 0.0;  ///< final robot position error [m]
   std::size_t mapped = 0;   ///< landmarks in the filter's map at the end
   FilterStats stats;        ///< after the last step (links = non-zero off-diagonal H blocks)
