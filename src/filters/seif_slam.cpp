@@ -213,17 +213,22 @@ void SeifSlam::relaxLandmark(int slot) {
 }
 
 void SeifSlam::relaxActiveBlock() {
-  // Block Gauss-Seidel on the robot and the active landmarks jointly (eq. 42 with S_i the
-  // projection onto {x, Y+}): mu_L = H_LL^-1 (b_L - H_{L,rest} mu_rest). The robot is linked
-  // only inside L; each active landmark's links to passive ones move to the right-hand side.
   order_.clear();
   for (const RobotLink& l : robot_links_) order_.push_back(l.slot);
   gather(order_);
+  solveGatheredMean();
+}
+
+void SeifSlam::solveGatheredMean() {
+  // Block Gauss-Seidel on the robot and the active landmarks jointly (eq. 42 with S_i the
+  // projection onto {x, Y+}): mu_L = H_LL^-1 (b_L - H_{L,rest} mu_rest). The robot is linked
+  // only inside L; each active landmark's links to passive ones move to the right-hand side.
+  local_rhs_ = local_b_;
   for (std::size_t i = 0; i < order_.size(); ++i) {
     const Node& node = nodes_[static_cast<std::size_t>(order_[i])];
     for (const Link& l : node.links) {
       const Node& other = nodes_[static_cast<std::size_t>(l.slot)];
-      if (other.active < 0) local_b_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i)).noalias() -= l.H * other.mu;
+      if (other.active < 0) local_rhs_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i)).noalias() -= l.H * other.mu;
     }
     blocks_touched_ += node.links.size();
   }
@@ -232,7 +237,7 @@ void SeifSlam::relaxActiveBlock() {
     throw NumericError("seif: the information of the robot and its active landmarks is not "
                        "positive definite at step " + std::to_string(step_));
   }
-  local_mu_ = llt.solve(local_b_);
+  local_mu_ = llt.solve(local_rhs_);
   mu_x_ = local_mu_.head<3>();
   for (std::size_t i = 0; i < order_.size(); ++i) {
     nodes_[static_cast<std::size_t>(order_[i])].mu = local_mu_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i));
@@ -325,7 +330,9 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations) {
   }
 }
 
-void SeifSlam::sparsify() {
+void SeifSlam::sparsify() { deactivateSurplus(false); }
+
+void SeifSlam::deactivateSurplus(bool solve_active_mean_first) {
   // §4, paper eq. (44-51): deactivate the surplus Y0, keep Y+.
   const int k = static_cast<int>(robot_links_.size());
   const int drop = k - options_.max_active;
@@ -348,6 +355,7 @@ void SeifSlam::sparsify() {
   for (int i = drop; i < k; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y+
   for (int i = 0; i < drop; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y0
   gather(order_);
+  if (solve_active_mean_first) solveGatheredMean();
   const double residual = sparsifyInformation(local_H_, local_b_, local_mu_, drop);
   last_sparsification_residual_ = std::max(last_sparsification_residual_, residual);
   const Eigen::Index y0 = local_H_.rows() - 2 * drop;
@@ -358,19 +366,19 @@ void SeifSlam::sparsify() {
 }
 
 void SeifSlam::update(std::span<const Observation> observations) {
+  const bool amortized = options_.mean == SeifOptions::Mean::Amortized;
   const bool book_order = options_.recovery == SeifOptions::Recovery::BeforeMeasurement;
-  if (options_.mean == SeifOptions::Mean::Amortized && book_order) recoverMean();
+  if (amortized && book_order) recoverMean();
   measurementUpdate(observations);
-  if (options_.mean == SeifOptions::Mean::Exact) {
+  if (!amortized) {
     recoverExactMean();  // sparsification then keeps this mean exactly
   } else if (!book_order) {
     recoverMean();
-  } else if (static_cast<int>(robot_links_.size()) > options_.max_active) {
-    // The sparsification's b~ = b + (H~ - H) mu is right only for the exact mean of the
-    // robot and the active landmarks; the measurements just moved it, so re-solve that block.
-    relaxActiveBlock();
   }
-  sparsify();
+  // With the book's order the measurements have just moved the mean of the robot and the
+  // active landmarks, and the sparsification's b~ = b + (H~ - H) mu is right only for their
+  // exact mean: it re-solves that block first, on the block it gathers anyway.
+  deactivateSurplus(amortized && book_order);
 }
 
 // ---------------------------------------------------------------- reading out ---------

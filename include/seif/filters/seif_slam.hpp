@@ -120,7 +120,12 @@ class SeifSlam final : public SlamFilter {
   void addToLink(int a, int c, const Mat2& H_ac);
   void relaxRobot();
   void relaxLandmark(int slot);
+  /// Gathers the robot and the active landmarks and solves their means jointly.
   void relaxActiveBlock();
+  /// The joint solve on the block already gathered (eq. 42 on {x, active}).
+  void solveGatheredMean();
+  /// sparsify(), optionally solving the gathered block's mean before eq. (44-51).
+  void deactivateSurplus(bool solve_active_mean_first);
   /// Gathers H, b, mu of the robot and the active landmarks listed in `order`
   /// (landmark slots) into the local buffers, and scatters them back.
   void gather(const std::vector<int>& order);
@@ -148,6 +153,7 @@ class SeifSlam final : public SlamFilter {
   LocalMatrix local_H_;
   LocalVector local_b_;
   LocalVector local_mu_;
+  LocalVector local_rhs_;
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxLocalDim> workspace_;
   std::vector<int> order_;
   std::vector<std::pair<double, int>> ranking_;
