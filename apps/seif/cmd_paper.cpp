@@ -131,16 +131,16 @@ struct Table {
 struct FilterSummary {
   std::string name;
   std::vector<std::uint64_t> seeds;
-  std::vector<double> mse, rmse, aligned, links, mapped, robot_links, pose_error;
+  std::vector<double> mse, rmse, aligned_mse, links, mapped, robot_links, pose_error;
   std::vector<double> diff_to_ekf;  // per-run mse - ekf mse [m^2]
-  Summary error, rms, shape, link, map, diff, pose;
+  Summary error, rms, aligned_error, link, map, diff, pose;
   double us_median = 0.0;
   double us_mean = 0.0;
   // Error relative to the EKF on the same runs: the ratio of the means, its 95% CI by the
   // delta method for paired samples (residuals mse_i - ratio * ekf_i), and the median of the
   // per-run ratios (what a typical run does; the means are dominated by a few runs).
   double ratio = 1.0, ratio_ci95 = 0.0, ratio_median = 1.0;
-  double shape_ratio = 1.0;  // the shape error's ratio of means to the EKF's
+  double aligned_ratio = 1.0;  // aligned_error's ratio of means to the EKF's
 };
 
 FilterSummary summarizeFilter(std::size_t f, const std::vector<PaperRun>& runs) {
@@ -152,7 +152,7 @@ FilterSummary summarizeFilter(std::size_t f, const std::vector<PaperRun>& runs) 
     s.seeds.push_back(run.seed);
     s.mse.push_back(r.mse);
     s.rmse.push_back(r.rmse);
-    s.aligned.push_back(r.aligned_mse);
+    s.aligned_mse.push_back(r.aligned_mse);
     s.links.push_back(static_cast<double>(r.stats.links));
     s.mapped.push_back(static_cast<double>(r.mapped));
     s.robot_links.push_back(static_cast<double>(r.stats.robot_links));
@@ -162,7 +162,7 @@ FilterSummary summarizeFilter(std::size_t f, const std::vector<PaperRun>& runs) 
   }
   s.error = summarize(s.mse);
   s.rms = summarize(s.rmse);
-  s.shape = summarize(s.aligned);
+  s.aligned_error = summarize(s.aligned_mse);
   s.link = summarize(s.links);
   s.map = summarize(s.mapped);
   s.diff = summarize(s.diff_to_ekf);
@@ -177,9 +177,9 @@ FilterSummary summarizeFilter(std::size_t f, const std::vector<PaperRun>& runs) 
   }
   s.ratio_ci95 = ci95HalfWidth(residual) / ekf_mean;
   s.ratio_median = median(std::move(ratios));
-  std::vector<double> ekf_shape;
-  for (const PaperRun& run : runs) ekf_shape.push_back(run.filters[0].aligned_mse);
-  s.shape_ratio = s.shape.mean / sampleMean(ekf_shape);
+  std::vector<double> ekf_aligned;
+  for (const PaperRun& run : runs) ekf_aligned.push_back(run.filters[0].aligned_mse);
+  s.aligned_ratio = s.aligned_error.mean / sampleMean(ekf_aligned);
   s.us_mean = sampleMean(us);
   s.us_median = median(std::move(us));
   return s;
@@ -357,12 +357,13 @@ void paperCommand(const PaperArgs& args) {
           << fmt("%.4f", sums[f].rms.ci95);
   }
   notes << "\n";
-  notes << "Map shape error: the final error after the best rigid 2-D alignment of each map to "
-           "the truth, i.e. with the whole map's offset and rotation removed [10^-3 m^2]:";
+  notes << "Aligned error (the map's shape error): the final error after the best rigid 2-D "
+           "alignment of each map to the truth, i.e. with the whole map's offset and rotation "
+           "removed [10^-3 m^2]:";
   for (std::size_t f = 0; f < 3; ++f) {
-    notes << (f ? ", " : " ") << sums[f].name << " " << fmt("%.3f", 1e3 * sums[f].shape.mean)
-          << " ± " << fmt("%.3f", 1e3 * sums[f].shape.ci95);
-    if (f > 0) notes << " (" << fmt("%.2f", sums[f].shape_ratio) << " × EKF)";
+    notes << (f ? ", " : " ") << sums[f].name << " " << fmt("%.3f", 1e3 * sums[f].aligned_error.mean)
+          << " ± " << fmt("%.3f", 1e3 * sums[f].aligned_error.ci95);
+    if (f > 0) notes << " (" << fmt("%.2f", sums[f].aligned_ratio) << " × EKF)";
   }
   notes << "\n";
   notes << "Paired difference to the EKF, same runs [10^-3 m^2]:";
@@ -501,7 +502,7 @@ void paperCommand(const PaperArgs& args) {
       per_run.push_back({{"seed", s.seeds[r]},
                          {"error", s.mse[r]},
                          {"rms", s.rmse[r]},
-                         {"aligned_error", s.aligned[r]},
+                         {"aligned_error", s.aligned_mse[r]},
                          {"links", s.links[r]},
                          {"mapped", s.mapped[r]},
                          {"pose_error", s.pose_error[r]}});
@@ -521,9 +522,9 @@ void paperCommand(const PaperArgs& args) {
         {"error_diff_to_ekf_ci95", s.diff.ci95},
         {"rms_mean", s.rms.mean},
         {"rms_ci95", s.rms.ci95},
-        {"aligned_error_mean", s.shape.mean},
-        {"aligned_error_ci95", s.shape.ci95},
-        {"aligned_error_ratio_to_ekf", s.shape_ratio},
+        {"aligned_error_mean", s.aligned_error.mean},
+        {"aligned_error_ci95", s.aligned_error.ci95},
+        {"aligned_error_ratio_to_ekf", s.aligned_ratio},
         {"links_mean", s.link.mean},
         {"links_ci95", s.link.ci95},
         {"links_min", s.link.min},

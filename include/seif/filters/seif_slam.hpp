@@ -75,9 +75,10 @@ class SeifSlam final : public SlamFilter {
   Eigen::MatrixXd information() const override;
 
   // The paper's four steps, public so that each can be run and checked alone.
-  // predict(u) = motionUpdate(u); update(z) = recoverMean(); measurementUpdate(z); sparsify()
-  // (Recovery::AfterMeasurement: recoverMean() after measurementUpdate(); exact mean:
-  // measurementUpdate(z); recoverExactMean(); sparsify()).
+  // predict(u) = motionUpdate(u); update(z) = recoverMean(); measurementUpdate(z); sparsify(),
+  // the sparsification first re-solving the robot-active block's mean on the block it gathers
+  // (Recovery::AfterMeasurement: recoverMean() after measurementUpdate(), no re-solve; exact
+  // mean: measurementUpdate(z); recoverExactMean(); sparsify()).
   void motionUpdate(const VelocityControl& u);              ///< §1, Lemma 3
   void recoverMean();                                      ///< §2, amortised, eq. (42)
   void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
