@@ -44,6 +44,7 @@ struct PaperArgs {
   int jobs = 0;  // 0: hardware concurrency
   std::string out = "out/paper";
   std::vector<int> sweep_active;
+  std::string path = "lawnmower";
   bool no_figures = false;
 };
 
@@ -249,15 +250,16 @@ nlohmann::json figureData(const SlamFilter& filter, const RunOutput& out, const 
 void paperCommand(const PaperArgs& args) {
   PaperOptions options;
   options.sweep_active = args.sweep_active;
+  options.path = parsePaperPath(args.path);
   const std::vector<PaperFilterSpec> specs = paperFilters(options);
   const WorldConfig world = paperWorld(args.seed, options);
   const std::size_t total = static_cast<std::size_t>(args.runs);
   unsigned jobs = args.jobs > 0 ? static_cast<unsigned>(args.jobs) : std::thread::hardware_concurrency();
   jobs = std::max(1u, std::min<unsigned>(jobs, static_cast<unsigned>(total)));
 
-  std::printf("seif paper: %zu runs of the paper world (%d landmarks, %d update cycles, known data "
-              "association), seeds %llu..%llu, %u threads\n",
-              total, world.landmarks, world.steps, static_cast<unsigned long long>(args.seed),
+  std::printf("seif paper: %zu runs of the paper world (%s path, %d landmarks, %d update cycles, "
+              "known data association), seeds %llu..%llu, %u threads\n",
+              total, args.path.c_str(), world.landmarks, world.steps, static_cast<unsigned long long>(args.seed),
               static_cast<unsigned long long>(args.seed + total - 1), jobs);
   std::fflush(stdout);
 
@@ -467,7 +469,12 @@ void paperCommand(const PaperArgs& args) {
       {"sensor_range", world.sensor_range},
       {"dt", world.dt},
       {"speed", world.speed},
-      {"path", "3:2 Lissajous curve x = 0.5 + 0.4 sin 3u, y = 0.5 + 0.4 sin 2u in the unit square (docs/simulator.md)"},
+      {"path", args.path},
+      {"path_description",
+       options.path == PaperPath::Lissajous
+           ? "3:2 Lissajous curve x = 0.5 + 0.4 sin 3u, y = 0.5 + 0.4 sin 2u in the unit square (docs/simulator.md)"
+           : "closed lawnmower loop: 6 lanes 0.1 from the border, corners of radius 0.04, return leg along "
+             "the bottom (docs/simulator.md)"},
       {"data_association", "known"},
       {"start", "every filter starts at the true start pose with initial pose sigma 1e-3"},
       {"theta_x", options.active},
@@ -572,7 +579,7 @@ void paperCommand(const PaperArgs& args) {
     std::ofstream md(dir / "table.md");
     md << "# The paper's experiment (Thrun et al. 2002, §4), reproduced\n\n";
     md << "`seif paper --runs " << total << " --seed " << args.seed << "`: " << n_runs
-       << " runs of the paper world (" << world.landmarks << " landmarks, " << world.steps
+       << " runs of the paper world (" << args.path << " path, " << world.landmarks << " landmarks, " << world.steps
        << " update cycles, known data association), simulator seeds " << args.seed << ".."
        << args.seed + total - 1 << "; theta_x = " << options.active << ", K = " << options.relax
        << ". The paper's numbers beside ours.\n\n";
@@ -656,6 +663,11 @@ void addPaperCommand(CLI::App& app) {
                   "also run the constant-time SEIF with each theta_x listed, e.g. 4,6,10,20")
       ->delimiter(',')
       ->check(CLI::Range(1, kMaxLocalLandmarks - 1));
+  cmd->add_option("--path", args->path,
+                  "the robot's path: lawnmower (a survey of the square, 2.4 laps) or lissajous (a\n"
+                  "3:2 Lissajous curve crossing itself, 1.6 laps); docs/simulator.md")
+      ->check(CLI::IsMember({"lawnmower", "lissajous"}))
+      ->capture_default_str();
   cmd->add_flag("--no-figures", args->no_figures, "write the figure data but do not render the figures");
   cmd->callback([args] { paperCommand(*args); });
 }

@@ -12,6 +12,7 @@ namespace {
 
 struct SimulateArgs {
   std::string preset = "paper";
+  std::string path = "lawnmower";
   int landmarks = 0;
   int steps = 0;
   std::uint64_t seed = 1;
@@ -19,7 +20,8 @@ struct SimulateArgs {
 };
 
 void simulateCommand(const SimulateArgs& args) {
-  const WorldConfig config = presetConfig(parseWorldPreset(args.preset), args.landmarks, args.steps, args.seed);
+  WorldConfig config = presetConfig(parseWorldPreset(args.preset), args.landmarks, args.steps, args.seed);
+  config.paper_path = parsePaperPath(args.path);
   SimStats stats;
   const RobotLog log = simulate(config, &stats);
   writeMrclam(args.out, log);
@@ -44,6 +46,9 @@ void addSimulateCommand(CLI::App& app) {
       "See docs/simulator.md.");
   cmd->add_option("--preset", args->preset, "paper, uniform or corridor")
       ->check(CLI::IsMember({"paper", "uniform", "corridor"}))
+      ->capture_default_str();
+  cmd->add_option("--path", args->path, "the paper world's path: lawnmower or lissajous")
+      ->check(CLI::IsMember({"lawnmower", "lissajous"}))
       ->capture_default_str();
   cmd->add_option("--landmarks", args->landmarks, "number of landmarks (default: the preset's)")
       ->check(CLI::PositiveNumber);

@@ -46,7 +46,9 @@ std::vector<PaperFilterSpec> paperFilters(const PaperOptions& options) {
 }
 
 WorldConfig paperWorld(std::uint64_t seed, const PaperOptions& options) {
-  return presetConfig(WorldPreset::Paper, options.landmarks, options.steps, seed);
+  WorldConfig world = presetConfig(WorldPreset::Paper, options.landmarks, options.steps, seed);
+  world.paper_path = options.path;
+  return world;
 }
 
 double landmarkMse(const SlamFilter& filter, const std::map<int, Vec2>& truth, std::size_t* count) {

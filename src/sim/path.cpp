@@ -92,21 +92,25 @@ ReferencePath lissajous(const Vec2& centre, double amplitude, int p, int q, int 
   return ReferencePath(std::move(v), true);
 }
 
-ReferencePath lawnmowerLoop(double side, double margin, double max_spacing) {
+ReferencePath lawnmowerLoop(double side, double margin, double max_spacing, double turn_radius) {
   // n lanes (n even, n >= 2) at x_i = margin + i d, d = (side - 2 margin) / (n - 1) <= max_spacing.
   const double span = side - 2.0 * margin;
   int lanes = 2;
   while (span / (lanes - 1) > max_spacing) lanes += 2;
   const double d = span / (lanes - 1);
-  const double rho = 0.5 * d;              // radius of every turn
-  const double y_top = side - margin - rho;  // lanes end here; top half circles reach side - margin
-  const double y_low = margin + d;         // inner lanes start here; bottom half circles reach margin + rho
+  // Radius of every turn: half circles (rho = d / 2) unless a tighter radius is asked for.
+  const double rho = turn_radius > 0.0 && turn_radius < 0.5 * d ? turn_radius : 0.5 * d;
+  const double y_top = side - margin - rho;  // lanes end here; top turns reach side - margin
+  const double y_low = margin + d;         // inner lanes start here, above the return leg
   const double y_outer = margin + rho;     // the first and the last lane reach down to here
   PathBuilder b(Pose2(margin, y_outer, kPi / 2));
+  auto turn = [&](double side_sign) {  // to the next lane: +1 left, -1 right
+    b.arc(rho, side_sign * kPi / 2).line(d - 2.0 * rho).arc(rho, side_sign * kPi / 2);
+  };
   b.line(y_top - y_outer);  // lane 0, up
   for (int i = 1; i < lanes; ++i) {
     const bool down = i % 2 == 1;
-    b.arc(rho, down ? -kPi : kPi);  // right turn at the top, left turn at the bottom
+    turn(down ? -1.0 : 1.0);  // right turns at the top, left turns at the bottom
     const double bottom = i == lanes - 1 ? y_outer : y_low;
     b.line(y_top - bottom);
   }

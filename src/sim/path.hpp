@@ -46,7 +46,11 @@ ReferencePath lissajous(const Vec2& centre, double amplitude, int p, int q, int 
 
 /// Closed boustrophedon ("lawnmower") loop through the square [0, side]^2 (see
 /// docs/simulator.md): an even number of lanes parallel to y, at most `max_spacing` apart,
-/// `margin` from the border, joined by half circles, and a return leg along the bottom.
-ReferencePath lawnmowerLoop(double side, double margin, double max_spacing);
+/// `margin` from the border, and a return leg along the bottom. Neighbouring lanes are
+/// joined by half circles, or, with 0 < turn_radius < half the lane spacing, by two quarter
+/// circles of that radius and a straight piece, so that every lane runs up to within
+/// margin + turn_radius of the border.
+ReferencePath lawnmowerLoop(double side, double margin, double max_spacing,
+                            double turn_radius = 0.0);
 
 }  // namespace seif::sim

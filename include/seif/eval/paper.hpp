@@ -27,6 +27,7 @@ struct PaperOptions {
   int steps = 0;      ///< update cycles; <= 0: the paper preset's 500
   int active = 6;     ///< theta_x of both SEIFs (the paper: 6)
   int relax = 10;     ///< K of the constant-time SEIF (the paper: 10)
+  PaperPath path = PaperPath::Lawnmower;  ///< the robot's path (the paper does not give one)
   /// Extra constant-time SEIFs, one per theta_x listed (the journal version's study),
   /// named "seif_active_<theta_x>" and run on the same data.
   std::vector<int> sweep_active;
@@ -44,7 +45,7 @@ struct PaperFilterSpec {
 std::vector<PaperFilterSpec> paperFilters(const PaperOptions& options);
 
 /// The simulator configuration of the run with simulator seed `seed`:
-/// presetConfig(WorldPreset::Paper, options.landmarks, options.steps, seed).
+/// presetConfig(WorldPreset::Paper, options.landmarks, options.steps, seed) on options.path.
 WorldConfig paperWorld(std::uint64_t seed, const PaperOptions& options);
 
 /// Mean squared landmark position error [m^2]: the mean over the landmarks the filter

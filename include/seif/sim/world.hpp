@@ -18,7 +18,7 @@ namespace seif {
 
 /// The worlds the simulator knows (docs/simulator.md "Presets").
 enum class WorldPreset {
-  Paper,     ///< Thrun et al. 2002: landmarks uniform in the unit square, 3:2 Lissajous path
+  Paper,     ///< Thrun et al. 2002: landmarks uniform in the unit square (path: PaperPath)
   Uniform,   ///< the paper's density and sensor in a square of side sqrt(N / 50), lawnmower loop
   Corridor,  ///< a straight strip at the paper's density, driven once: the map grows steadily
 };
@@ -29,10 +29,24 @@ WorldPreset parseWorldPreset(std::string_view name);
 /// The preset's lower-case name, as parseWorldPreset() accepts it.
 std::string_view worldPresetName(WorldPreset preset);
 
+/// The path the robot follows in the Paper world (the paper does not give its path;
+/// docs/simulator.md "paper" compares the two).
+enum class PaperPath {
+  Lawnmower,  ///< closed boustrophedon survey of the square, 2.4 laps in 500 steps (default)
+  Lissajous,  ///< 3:2 Lissajous curve crossing itself at wide angles, 1.6 laps in 500 steps
+};
+
+/// "lawnmower" | "lissajous". Throws std::invalid_argument naming the valid names.
+PaperPath parsePaperPath(std::string_view name);
+
+/// The path's lower-case name, as parsePaperPath() accepts it.
+std::string_view paperPathName(PaperPath path);
+
 /// Everything that defines a simulated run. Get one from presetConfig() and change fields
 /// if needed; simulate() validates it. Units: metres, seconds, radians.
 struct WorldConfig {
   WorldPreset preset = WorldPreset::Paper;
+  PaperPath paper_path = PaperPath::Lawnmower;  ///< the Paper world's path (others ignore it)
   int landmarks = 50;        ///< number of landmarks N (subjects 6 .. 5 + N)
   int steps = 500;           ///< number of control steps T
   std::uint64_t seed = 1;    ///< the one seed of all randomness
@@ -69,9 +83,9 @@ struct SimStats {
   std::size_t max_detections_per_step = 0;
   std::size_t steps_without_detection = 0;
   std::size_t distinct_landmarks_seen = 0;  ///< landmarks detected at least once
-  /// Detections dropped because the noisy range came out <= 0: a range sensor has no
-  /// negative returns (rare with the presets' blind zone).
-  std::size_t negative_ranges = 0;
+  /// Detections dropped because the noisy range came out below min_range (or <= 0): the
+  /// sensor reports nothing inside its blind zone, whatever the true distance.
+  std::size_t ranges_below_minimum = 0;
   /// Largest distance between the true position and the reference point the controller
   /// tracks: how far the noisy robot strayed from its path.
   double max_tracking_error = 0.0;
