@@ -247,6 +247,28 @@ TEST(PaperCli, FourRunsEndToEnd) {
   fs::remove_all(dir);
 }
 
+TEST(PaperCli, PathSelectsThePaperWorldsPath) {
+  const fs::path dir = scratch("path");
+  const fs::path lawn = dir / "lawnmower", liss = dir / "lissajous";
+  ASSERT_EQ(runCli("paper --runs 1 --seed 3 --no-figures --out " + lawn.string(), dir / "log1"), 0)
+      << slurp(dir / "log1");
+  ASSERT_EQ(runCli("paper --runs 1 --seed 3 --path lissajous --no-figures --out " + liss.string(),
+                   dir / "log2"),
+            0)
+      << slurp(dir / "log2");
+  const auto a = nlohmann::json::parse(slurp(lawn / "results.json"));
+  const auto b = nlohmann::json::parse(slurp(liss / "results.json"));
+  EXPECT_EQ(a["setup"]["path"], "lawnmower");  // the default
+  EXPECT_EQ(b["setup"]["path"], "lissajous");
+  EXPECT_NE(slurp(dir / "log2").find("lissajous path"), std::string::npos);
+  // Same seed, other path: other data, so other errors.
+  EXPECT_NE(a["filters"][0]["error_mean"], b["filters"][0]["error_mean"]);
+  // An unknown path is a usage error (exit 1) naming the valid ones.
+  EXPECT_EQ(runCli("paper --runs 1 --path spiral --no-figures --out " + (dir / "bad").string(), dir / "log3"), 1);
+  EXPECT_NE(slurp(dir / "log3").find("lissajous"), std::string::npos) << slurp(dir / "log3");
+  fs::remove_all(dir);
+}
+
 TEST(PaperCli, SweepAddsItsSection) {
   const fs::path dir = scratch("sweep");
   ASSERT_EQ(runCli("paper --runs 2 --jobs 2 --sweep-active 4,10 --no-figures --out " + dir.string(),
