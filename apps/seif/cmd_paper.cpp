@@ -664,7 +664,7 @@ void addPaperCommand(CLI::App& app) {
       ->delimiter(',')
       ->check(CLI::Range(1, kMaxLocalLandmarks - 1));
   cmd->add_option("--path", args->path,
-                  "the robot's path: lawnmower (a survey of the square, 2.4 laps) or lissajous (a\n"
+                  "the robot's path: lawnmower (a survey of the square, 1.75 laps) or lissajous (a\n"
                   "3:2 Lissajous curve crossing itself, 1.6 laps); docs/simulator.md")
       ->check(CLI::IsMember({"lawnmower", "lissajous"}))
       ->capture_default_str();

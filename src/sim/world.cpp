@@ -307,6 +307,8 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
   Pose2 x = reference(0);
   Pose2 ref = x;
   log.groundtruth.push_back({0.0, x});
+  // One blind zone for the true and the reported range: neither is logged below it.
+  const double blind_zone = std::max(kMinDetectionRange, c.min_range);
   for (std::size_t k = 0; k < T; ++k) {
     const Pose2 next = reference(k + 1);
     const VelocityControl u = track(x, ref, next, c.speed, c.dt);
@@ -321,8 +323,7 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
     st.max_tracking_error = std::max(st.max_tracking_error, (x.head<2>() - ref.head<2>()).norm());
 
     found.clear();
-    const std::size_t checked = grid.query(x.head<2>(), c.sensor_range,
-                                             std::max(kMinDetectionRange, c.min_range), found);
+    const std::size_t checked = grid.query(x.head<2>(), c.sensor_range, blind_zone, found);
     st.candidates_checked_total += checked;
     st.candidates_checked_max_per_step = std::max(st.candidates_checked_max_per_step, checked);
     st.max_detections_per_step = std::max(st.max_detections_per_step, found.size());
@@ -331,9 +332,7 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
       const Vec2 z = RangeBearingModel::predict(x, landmarks[i]);
       const auto [e_r, e_b] = rng.normalPair();
       const double range = z.x() + c.noise.sigma_range * e_r;
-      // The sensor reports no range inside its blind zone (nor a non-positive one): a noisy
-      // range below min_range is dropped like a true one.
-      if (range <= 0.0 || range < c.min_range) {
+      if (range < blind_zone) {  // the sensor reports no range inside its blind zone
         ++st.ranges_below_minimum;
         continue;
       }

@@ -32,7 +32,7 @@ std::string_view worldPresetName(WorldPreset preset);
 /// The path the robot follows in the Paper world (the paper does not give its path;
 /// docs/simulator.md "paper" compares the two).
 enum class PaperPath {
-  Lawnmower,  ///< closed boustrophedon survey of the square, 2.4 laps in 500 steps (default)
+  Lawnmower,  ///< closed boustrophedon survey of the square, 1.75 laps in 500 steps (default)
   Lissajous,  ///< 3:2 Lissajous curve crossing itself at wide angles, 1.6 laps in 500 steps
 };
 
@@ -83,8 +83,8 @@ struct SimStats {
   std::size_t max_detections_per_step = 0;
   std::size_t steps_without_detection = 0;
   std::size_t distinct_landmarks_seen = 0;  ///< landmarks detected at least once
-  /// Detections dropped because the noisy range came out below min_range (or <= 0): the
-  /// sensor reports nothing inside its blind zone, whatever the true distance.
+  /// Detections dropped because the noisy range came out below the blind zone (the same
+  /// threshold as for the true range): the sensor reports nothing there.
   std::size_t ranges_below_minimum = 0;
   /// Largest distance between the true position and the reference point the controller
   /// tracks: how far the noisy robot strayed from its path.
