@@ -238,3 +238,22 @@ TEST(InformationMotionUpdate, IsTheLinearisedPredictionForAnyLinearisationPoint)
     EXPECT_LT((mun.head<3>() - (mu.head<3>() + delta)).norm(), 1e-12);
   }
 }
+
+// The marginals come from the selected inverse of the cached factor: after every step they
+// equal the blocks of the dense inverse of H, for the pose and every landmark.
+TEST(Seif, MarginalCovariancesAreTheBlocksOfTheInverseAfterEveryStep) {
+  const test::Scenario s = test::makeScenario(5, 25, 60);
+  SeifSlam seif(s.start, configFor(s));
+  for (const Step& step : s.steps) {
+    seif.step(step.u, step.observations);
+    const Eigen::MatrixXd Sigma = seif.covariance();
+    const double scale = Sigma.cwiseAbs().maxCoeff();
+    ASSERT_LT((seif.poseCovariance() - Sigma.topLeftCorner<3, 3>()).cwiseAbs().maxCoeff(), 1e-9 * scale);
+    for (std::size_t k = 0; k < seif.landmarkIds().size(); ++k) {
+      const int id = seif.landmarkIds()[k];
+      const Eigen::Index i = 3 + 2 * static_cast<Eigen::Index>(k);
+      ASSERT_LT((seif.landmarkCovariance(id) - Sigma.block<2, 2>(i, i)).cwiseAbs().maxCoeff(), 1e-9 * scale)
+          << "landmark " << id;
+    }
+  }
+}

@@ -49,6 +49,7 @@ RunOutput runFilter(SlamFilter& filter, const Dataset& data,
     if (progress && (k % every == 0 || k + 1 == total)) progress(k + 1, total);
   }
   out.final_stats = filter.stats();
+  out.rejected_observations = filter.rejectedObservations();
   out.max_robot_links = std::max(out.max_robot_links, out.final_stats.robot_links);
   return out;
 }

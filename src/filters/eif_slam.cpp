@@ -11,7 +11,7 @@
 namespace seif {
 
 EifSlam::EifSlam(const Pose2& initial_pose, const FilterConfig& config)
-    : config_(config), H_(Mat3::Zero()), b_(Vec3::Zero()), mu_(initial_pose) {
+    : config_(config), gate_(config.outlier_gate), H_(Mat3::Zero()), b_(Vec3::Zero()), mu_(initial_pose) {
   H_.diagonal() = config.initial_pose_sigma.cwiseAbs2().cwiseInverse();
   b_ = H_ * mu_;
 }
@@ -90,10 +90,12 @@ void EifSlam::update(std::span<const Observation> observations) {
     mu_.conservativeResize(n + 2);
     mu_.tail<2>() = y;
   }
-  // Paper eq. (21-22), all observations linearised at the prior mean.
+  // Paper eq. (21-22), all observations linearised at the prior mean; gross outliers
+  // (OutlierGate) are dropped.
   const Pose2 x = mu_.head<3>();
   for (const Observation& z : observations) {
     const Eigen::Index l = LandmarkIndex::stateIndex(index_.find(z.landmark));
+    if (gate_.rejects(x, mu_.segment<2>(l), z, Z_inv)) continue;
     const MeasurementInformation info = measurementInformation(x, mu_.segment<2>(l), z, Z_inv);
     H_.topLeftCorner<3, 3>() += info.H.topLeftCorner<3, 3>();
     H_.block<3, 2>(0, l) += info.H.topRightCorner<3, 2>();

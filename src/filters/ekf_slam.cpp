@@ -6,12 +6,13 @@
 #include <seif/models/velocity_motion.hpp>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <sstream>
 
 namespace seif {
 
 EkfSlam::EkfSlam(const Pose2& initial_pose, const FilterConfig& config)
-    : config_(config), mu_(initial_pose), sigma_(Mat3::Zero()) {
+    : config_(config), gate_(config.outlier_gate), mu_(initial_pose), sigma_(Mat3::Zero()) {
   sigma_.diagonal() = config.initial_pose_sigma.cwiseAbs2();
 }
 
@@ -70,12 +71,16 @@ void EkfSlam::addLandmark(const Observation& z) {
 void EkfSlam::update(std::span<const Observation> observations) {
   // A landmark's first observation initialises it (and carries no other information);
   // all other observations form one joint update linearised at the prior mean.
+  // Gross outliers (OutlierGate) are dropped first.
+  const Mat2 Z = RangeBearingModel::noise(config_.noise.sigma_range, config_.noise.sigma_bearing);
+  const Mat2 Z_inv = Z.inverse();
   std::vector<const Observation*> updates;
   updates.reserve(observations.size());
   for (const Observation& z : observations) {
-    if (index_.find(z.landmark) < 0) {
+    const int slot = index_.find(z.landmark);
+    if (slot < 0) {
       addLandmark(z);
-    } else {
+    } else if (!gate_.rejects(mu_.head<3>(), mu_.segment<2>(LandmarkIndex::stateIndex(slot)), z, Z_inv)) {
       updates.push_back(&z);
     }
   }
@@ -83,7 +88,6 @@ void EkfSlam::update(std::span<const Observation> observations) {
 
   const Eigen::Index n = sigma_.rows();
   const Eigen::Index m = 2 * static_cast<Eigen::Index>(updates.size());
-  const Mat2 Z = RangeBearingModel::noise(config_.noise.sigma_range, config_.noise.sigma_bearing);
   Eigen::MatrixXd PJt(n, m);  // Sigma J^T, using J's sparsity
   Eigen::VectorXd nu(m);
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(m, m);

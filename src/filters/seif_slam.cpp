@@ -1,12 +1,12 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
+#include <seif/core/sparse_marginals.hpp>
 #include <seif/filters/seif_slam.hpp>
 #include <seif/models/range_bearing.hpp>
 #include <seif/models/velocity_motion.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <array>
 #include <sstream>
@@ -41,12 +41,10 @@ SeifOptions::RelaxOrder SeifOptions::parseRelaxOrder(std::string_view s) {
                               "' (expected random or cyclic)");
 }
 
-struct SeifSlam::Factor {
-  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt;
-};
 
 SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const SeifOptions& options)
     : config_(config),
+      gate_(config.outlier_gate),
       options_(options),
       H_xx_(config.initial_pose_sigma.cwiseAbs2().cwiseInverse().asDiagonal()),
       mu_x_(initial_pose),
@@ -255,7 +253,8 @@ void SeifSlam::recoverMean() {
   constexpr int kChunk = 16;
   std::array<int, kChunk> picks{};
   std::uniform_int_distribution<int> pick(0, std::max(0, static_cast<int>(nodes_.size()) - 1));
-  const int random = nodes_.empty() ? 0 : options_.relax;
+  // K is capped at the map's size: relaxing a landmark twice in one pass is pointless.
+  const int random = std::min(options_.relax, static_cast<int>(nodes_.size()));
   auto nodeAt = [this](int slot) -> const Node& { return nodes_[static_cast<std::size_t>(slot)]; };
   auto draw = [&](int count) {  // round 1: the nodes
     for (int i = 0; i < count; ++i) {
@@ -309,6 +308,8 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations) {
       slot = index_.add(z.landmark);
       nodes_.emplace_back();
       nodes_.back().mu = RangeBearingModel::inverse(mu_x_, Vec2(z.range, z.bearing));
+    } else if (gate_.rejects(mu_x_, nodes_[static_cast<std::size_t>(slot)].mu, z, Z_inv)) {
+      continue;  // a gross outlier (OutlierGate)
     }
     Node& node = nodes_[static_cast<std::size_t>(slot)];
     const MeasurementInformation info = measurementInformation(mu_x_, node.mu, z, Z_inv);
@@ -421,18 +422,18 @@ Eigen::VectorXd SeifSlam::mean() const {
   return mu;
 }
 
-Eigen::VectorXd SeifSlam::exactMean() const {
+const SparseMarginals& SeifSlam::factor() const {
   if (!factor_) {
-    factor_ = std::make_unique<Factor>();
-    factor_->llt.compute(sparseInformation());
+    try {
+      factor_ = std::make_unique<SparseMarginals>(sparseInformation());
+    } catch (const NumericError& e) {
+      throw NumericError("seif: at step " + std::to_string(step_) + ": " + e.what());
+    }
   }
-  if (factor_->llt.info() != Eigen::Success) {
-    factor_.reset();
-    throw NumericError("seif: the information matrix is not positive definite at step " +
-                       std::to_string(step_));
-  }
-  return factor_->llt.solve(informationVector());
+  return *factor_;
 }
+
+Eigen::VectorXd SeifSlam::exactMean() const { return factor().solve(informationVector()); }
 
 void SeifSlam::recoverExactMean() {
   const Eigen::VectorXd mu = exactMean();
@@ -453,19 +454,12 @@ Pose2 SeifSlam::pose() const { return wrapHeading(Pose2(mu_x_)); }
 
 Vec2 SeifSlam::landmark(int id) const { return nodes_[static_cast<std::size_t>(index_.require(id, "seif"))].mu; }
 
-Mat3 SeifSlam::poseCovariance() const {
-  exactMean();  // builds the factor
-  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(3 + 2 * index_.size(), 3);
-  E.topRows<3>().setIdentity();
-  return factor_->llt.solve(E).topRows<3>();
-}
+// The marginals are read off the selected inverse of the cached factor (SparseMarginals):
+// H stores every robot and landmark diagonal block in full, so each lies in its pattern.
+Mat3 SeifSlam::poseCovariance() const { return factor().covarianceBlock<3>(0); }
 
 Mat2 SeifSlam::landmarkCovariance(int id) const {
-  const int i = LandmarkIndex::stateIndex(index_.require(id, "seif"));
-  exactMean();
-  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(3 + 2 * index_.size(), 2);
-  E.middleRows<2>(i).setIdentity();
-  return factor_->llt.solve(E).middleRows<2>(i);
+  return factor().covarianceBlock<2>(LandmarkIndex::stateIndex(index_.require(id, "seif")));
 }
 
 std::vector<int> SeifSlam::activeLandmarks() const {

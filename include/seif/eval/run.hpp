@@ -19,6 +19,7 @@ struct RunOutput {
   FilterStats final_stats;
   std::size_t max_robot_links = 0;     ///< over all steps
   std::size_t max_blocks_touched = 0;  ///< over all steps
+  std::size_t rejected_observations = 0;  ///< by the gross-outlier gate (OutlierGate)
 };
 
 /// The pose the filter starts from: the ground truth at the first step's time when the

@@ -4,6 +4,7 @@
 // form of paper Lemma 3 on the full matrix, measurement update paper eq. (21-22), and the
 // mean recovered exactly by a Cholesky solve of H mu = b. Algebraically the EKF.
 #include <seif/filters/landmark_index.hpp>
+#include <seif/filters/outlier_gate.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Cholesky>
@@ -27,6 +28,7 @@ class EifSlam final : public SlamFilter {
   Mat2 landmarkCovariance(int id) const override;
   FilterStats stats() const override;
   std::size_t robotLinks() const override;
+  std::size_t rejectedObservations() const override { return gate_.rejected(); }
   std::size_t blocksTouched() const override {
     return (landmarkIds().size() + 1) * (landmarkIds().size() + 1);
   }
@@ -41,6 +43,7 @@ class EifSlam final : public SlamFilter {
   const Eigen::LLT<Eigen::MatrixXd>& factor() const;
 
   FilterConfig config_;
+  OutlierGate gate_;
   LandmarkIndex index_;
   Eigen::MatrixXd H_;
   Eigen::VectorXd b_;

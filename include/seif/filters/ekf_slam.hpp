@@ -4,6 +4,7 @@
 // observations of one instant are applied jointly at one linearisation point, so that the
 // EKF and the EIF give the same posterior to rounding (algorithm.md "Models", "EIF").
 #include <seif/filters/landmark_index.hpp>
+#include <seif/filters/outlier_gate.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Core>
@@ -26,6 +27,7 @@ class EkfSlam final : public SlamFilter {
   Mat2 landmarkCovariance(int id) const override;
   FilterStats stats() const override;
   std::size_t robotLinks() const override { return landmarkIds().size(); }  // Sigma^-1 is dense
+  std::size_t rejectedObservations() const override { return gate_.rejected(); }
   std::size_t blocksTouched() const override {
     return (landmarkIds().size() + 1) * (landmarkIds().size() + 1);
   }
@@ -38,6 +40,7 @@ class EkfSlam final : public SlamFilter {
   void addLandmark(const Observation& z);
 
   FilterConfig config_;
+  OutlierGate gate_;
   LandmarkIndex index_;
   Eigen::VectorXd mu_;     // heading kept unwrapped in the state; pose() wraps it
   Eigen::MatrixXd sigma_;

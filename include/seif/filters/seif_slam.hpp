@@ -9,6 +9,7 @@
 //                 max_active landmarks are active.
 #include <seif/filters/information_ops.hpp>
 #include <seif/filters/landmark_index.hpp>
+#include <seif/filters/outlier_gate.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/SparseCore>
@@ -19,6 +20,8 @@
 
 namespace seif {
 
+class SparseMarginals;
+
 struct SeifOptions {
   enum class Mean { Amortized, Exact };
   enum class Deactivate { Weakest, Oldest };
@@ -27,6 +30,7 @@ struct SeifOptions {
 
   int max_active = 6;  ///< theta_x: landmarks linked to the robot after each step
   int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
+                       ///< (at most every landmark once: K is capped at the map size)
   /// Amortized: constant-time coordinate descent. Exact: sparse Cholesky solve of H mu = b
   /// after every update ("SEIF with exact mu" in the paper's table; not constant time).
   Mean mean = Mean::Amortized;
@@ -68,6 +72,7 @@ class SeifSlam final : public SlamFilter {
   Mat2 landmarkCovariance(int id) const override;
   FilterStats stats() const override;
   std::size_t robotLinks() const override { return robot_links_.size(); }
+  std::size_t rejectedObservations() const override { return gate_.rejected(); }
   std::size_t blocksTouched() const override { return blocks_touched_; }
 
   Eigen::VectorXd mean() const override;
@@ -135,6 +140,7 @@ class SeifSlam final : public SlamFilter {
   void invalidateFactor();
 
   FilterConfig config_;
+  OutlierGate gate_;
   SeifOptions options_;
   LandmarkIndex index_;
   Mat3 H_xx_;
@@ -159,8 +165,10 @@ class SeifSlam final : public SlamFilter {
   std::vector<int> order_;
   std::vector<std::pair<double, int>> ranking_;
 
-  struct Factor;  // cached sparse Cholesky factor for exact means and covariances
-  mutable std::unique_ptr<Factor> factor_;
+  /// The sparse Cholesky factor of H and its selected inverse, built on first use after H
+  /// changed: exact means and marginal covariances.
+  const SparseMarginals& factor() const;
+  mutable std::unique_ptr<SparseMarginals> factor_;
 };
 
 }  // namespace seif

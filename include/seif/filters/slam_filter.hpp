@@ -17,6 +17,8 @@ struct FilterConfig {
   /// Initial pose standard deviations (x [m], y [m], theta [rad]). Information filters need
   /// a finite prior, so the start pose is anchored with this (small) uncertainty.
   Vec3 initial_pose_sigma = Vec3(1e-3, 1e-3, 1e-3);
+  /// Gross-outlier gate in measurement standard deviations (OutlierGate); infinity disables it.
+  double outlier_gate = 1000.0;
 };
 
 /// Structure of the information matrix, for tests, metrics.json and the paper's table.
@@ -47,6 +49,11 @@ class SlamFilter {
   }
 
   virtual Pose2 pose() const = 0;
+  /// Marginal covariances. EKF: read off its covariance, O(1). EIF: a solve with its cached
+  /// dense factor, O(N^2). SEIF: exact, from the sparse Cholesky factor of H and its selected
+  /// inverse (SparseMarginals), computed on the first call after H changed at the cost of
+  /// one factorisation, then cached: every marginal of one state costs that once, and each
+  /// call afterwards a lookup.
   virtual Mat3 poseCovariance() const = 0;
   /// Landmark ids in the order they entered the map (= their order in the state vector).
   virtual const std::vector<int>& landmarkIds() const = 0;
@@ -59,6 +66,8 @@ class SlamFilter {
   /// enough to read after every step.
   virtual std::size_t robotLinks() const = 0;
   virtual std::size_t blocksTouched() const = 0;
+  /// Observations rejected by the gross-outlier gate so far (FilterConfig::outlier_gate).
+  virtual std::size_t rejectedObservations() const = 0;
 
   /// Full-state moments and information in the state order [x, y, th, landmarks...].
   /// Dense and O(N^3) for information filters: for tests and figures, not for the loop.

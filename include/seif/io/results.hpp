@@ -1,6 +1,7 @@
 #pragma once
 // Result files of a run: trajectory.tum (TUM format, read by evo and most SLAM tools) and
-// map.csv (id, x, y, and the 2x2 marginal covariance).
+// map.csv (id, x, y, and the 2x2 marginal covariance). Both are written atomically
+// (AtomicFile): complete, or absent.
 #include <seif/filters/slam_filter.hpp>
 #include <seif/io/dataset.hpp>
 

@@ -1,0 +1,25 @@
+#include <seif/filters/outlier_gate.hpp>
+#include <seif/models/range_bearing.hpp>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace seif {
+
+OutlierGate::OutlierGate(double sigmas) : sigmas_(sigmas), threshold_(sigmas * sigmas) {
+  if (!(sigmas > 0.0)) {  // also NaN
+    throw std::invalid_argument("outlier gate must be > 0 standard deviations (infinity disables it), found " +
+                                std::to_string(sigmas));
+  }
+}
+
+bool OutlierGate::rejects(const Pose2& x, const Vec2& y, const Observation& z, const Mat2& Z_inv) {
+  if (std::isinf(sigmas_)) return false;
+  const Vec2 nu = RangeBearingModel::innovation(Vec2(z.range, z.bearing), RangeBearingModel::predict(x, y));
+  const bool reject = !(nu.dot(Z_inv * nu) <= threshold_);  // NaN innovations are rejected too
+  if (reject) ++rejected_;
+  return reject;
+}
+
+}  // namespace seif

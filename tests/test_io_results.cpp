@@ -1,0 +1,100 @@
+// Result files are complete or absent: written under a temporary name and renamed.
+#include <seif/core/errors.hpp>
+#include <seif/filters/ekf_slam.hpp>
+#include <seif/io/atomic_file.hpp>
+#include <seif/io/results.hpp>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace seif;
+
+fs::path freshDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("seif-results-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::size_t entries(const fs::path& dir) {
+  std::size_t n = 0;
+  for (auto it = fs::directory_iterator(dir); it != fs::directory_iterator(); ++it) ++n;
+  return n;
+}
+
+/// An EKF whose covariance read-out fails at the third landmark, as an interrupted run would.
+class FailingFilter : public SlamFilter {
+ public:
+  FailingFilter() : ekf_(Pose2::Zero(), FilterConfig{}) {}
+  std::string name() const override { return "failing"; }
+  void predict(const VelocityControl& u) override { ekf_.predict(u); }
+  void update(std::span<const Observation> z) override { ekf_.update(z); }
+  Pose2 pose() const override { return ekf_.pose(); }
+  Mat3 poseCovariance() const override { return ekf_.poseCovariance(); }
+  const std::vector<int>& landmarkIds() const override { return ekf_.landmarkIds(); }
+  bool hasLandmark(int id) const override { return ekf_.hasLandmark(id); }
+  Vec2 landmark(int id) const override { return ekf_.landmark(id); }
+  Mat2 landmarkCovariance(int id) const override {
+    if (++calls_ == 3) throw std::runtime_error("interrupted");
+    return ekf_.landmarkCovariance(id);
+  }
+  FilterStats stats() const override { return ekf_.stats(); }
+  std::size_t robotLinks() const override { return ekf_.robotLinks(); }
+  std::size_t blocksTouched() const override { return ekf_.blocksTouched(); }
+  std::size_t rejectedObservations() const override { return ekf_.rejectedObservations(); }
+  Eigen::VectorXd mean() const override { return ekf_.mean(); }
+  Eigen::MatrixXd covariance() const override { return ekf_.covariance(); }
+  Eigen::MatrixXd information() const override { return ekf_.information(); }
+
+ private:
+  EkfSlam ekf_;
+  mutable int calls_ = 0;
+};
+
+TEST(AtomicFile, AFailedWriteLeavesNeitherTheFileNorATemporary) {
+  const fs::path dir = freshDir("fail");
+  FailingFilter filter;
+  const Observation z[] = {{1, 1.0, 0.1}, {2, 1.5, -0.2}, {3, 2.0, 0.5}, {4, 2.5, 1.0}};
+  filter.update(z);
+  EXPECT_THROW(writeMapCsv(dir / "map.csv", filter), std::runtime_error);
+  EXPECT_EQ(entries(dir), 0u);
+  fs::remove_all(dir);
+}
+
+TEST(AtomicFile, ACompleteWriteReplacesTheOldFile) {
+  const fs::path dir = freshDir("ok");
+  { std::ofstream(dir / "metrics.json") << "old"; }
+  writeFileAtomically(dir / "metrics.json", "new\n");
+  std::ifstream in(dir / "metrics.json");
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), "new\n");
+  EXPECT_EQ(entries(dir), 1u);
+  fs::remove_all(dir);
+}
+
+TEST(AtomicFile, UnwritableTargetsAreDataErrorsNamingThePath) {
+  const fs::path dir = freshDir("bad");
+  { std::ofstream(dir / "a_file") << "x"; }
+  try {
+    writeFileAtomically(dir / "a_file" / "map.csv", "x");
+    FAIL() << "no error";
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("a_file"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(requireWritableDirectory(dir / "a_file"), DataError);
+  EXPECT_THROW(requireWritableDirectory(dir / "a_file" / "sub"), DataError);
+  EXPECT_NO_THROW(requireWritableDirectory(dir / "new" / "sub"));
+  EXPECT_TRUE(fs::is_directory(dir / "new" / "sub"));
+  fs::remove_all(dir);
+}
+
+}  // namespace
