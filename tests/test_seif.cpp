@@ -257,3 +257,19 @@ TEST(Seif, MarginalCovariancesAreTheBlocksOfTheInverseAfterEveryStep) {
     }
   }
 }
+
+// K beyond the map's size relaxes every landmark once per step, no more: K = 1e9 is the
+// same filter as K = N (it used to relax a 25-landmark map a billion times per step).
+TEST(Seif, RelaxationIsCappedAtTheMapSize) {
+  const test::Scenario s = test::makeScenario(8, 25, 60);
+  SeifOptions all, huge;
+  all.relax = 25;
+  huge.relax = 1'000'000'000;
+  SeifSlam a(s.start, configFor(s), all), b(s.start, configFor(s), huge);
+  for (const Step& step : s.steps) {
+    a.step(step.u, step.observations);
+    b.step(step.u, step.observations);
+    ASSERT_EQ(a.blocksTouched(), b.blocksTouched());
+  }
+  EXPECT_EQ(a.mean(), b.mean());
+}

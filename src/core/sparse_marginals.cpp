@@ -12,7 +12,11 @@ namespace seif {
 struct SparseMarginals::Impl {
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
   Eigen::VectorXi position;     // position[i]: where variable i sits in the permuted order
-  mutable std::vector<double> Z;  // selected inverse on the pattern of L (empty: not computed)
+  // The selected inverse on the pattern of L, filled column by column as reads need it.
+  mutable std::vector<double> Z;
+  mutable std::vector<char> done;  // done[j]: column j of Z is computed
+  mutable std::vector<int> path;   // work buffers
+  mutable std::vector<double> acc;
 
   const Eigen::SparseMatrix<double>& L() const { return llt.matrixL().nestedExpression(); }
 };
@@ -34,16 +38,30 @@ Eigen::Index SparseMarginals::factorNonZeros() const { return impl_->L().nonZero
 
 Eigen::VectorXd SparseMarginals::solve(const Eigen::VectorXd& b) const { return impl_->llt.solve(b); }
 
-void SparseMarginals::computeSelectedInverse() const {
+// Column j of Z needs the columns of the rows below its diagonal, which are all ancestors of
+// j in the elimination tree (the parent of j is its first row below the diagonal). So one
+// marginal needs only the columns on the path from its variable to the root, computed from
+// the root down; a map of marginals shares those paths and costs one full pass at most.
+void SparseMarginals::computeColumnsFor(int column) const {
   const Eigen::SparseMatrix<double>& L = impl_->L();
-  const Eigen::Index n = L.cols();
   const int* outer = L.outerIndexPtr();
   const int* rows = L.innerIndexPtr();
   const double* values = L.valuePtr();
   std::vector<double>& Z = impl_->Z;
-  Z.assign(static_cast<std::size_t>(L.nonZeros()), 0.0);
-  std::vector<double> acc;  // sum_k Z_{r_t k} L_kj for the rows r_t of column j
-  for (Eigen::Index j = n - 1; j >= 0; --j) {
+  std::vector<char>& done = impl_->done;
+  if (Z.empty()) {
+    Z.assign(static_cast<std::size_t>(L.nonZeros()), 0.0);
+    done.assign(static_cast<std::size_t>(L.cols()), 0);
+  }
+  std::vector<int>& path = impl_->path;
+  path.clear();
+  for (int j = column; j >= 0 && !done[static_cast<std::size_t>(j)];) {
+    path.push_back(j);
+    j = outer[j + 1] - outer[j] > 1 ? rows[outer[j] + 1] : -1;  // parent, or -1 at a root
+  }
+  std::vector<double>& acc = impl_->acc;  // sum_k Z_{r_t k} L_kj for the rows r_t of column j
+  for (auto it = path.rbegin(); it != path.rend(); ++it) {
+    const int j = *it;
     const int begin = outer[j], end = outer[j + 1];  // rows[begin] == j: the diagonal first
     const int m = end - begin - 1;                   // rows below the diagonal
     const double Ljj = values[begin];
@@ -59,8 +77,8 @@ void SparseMarginals::computeSelectedInverse() const {
         const int r = rows[begin + 1 + t];
         while (rows[p] < r) ++p;  // struct(j) below k is a subset of struct(k): r is found
         const double Zrk = Z[static_cast<std::size_t>(p)];
-        acc[static_cast<std::size_t>(t)] += Zrk * Lkj;                      // row r_t, term k
-        acc[static_cast<std::size_t>(s)] += Zrk * values[begin + 1 + t];    // row k, term r_t
+        acc[static_cast<std::size_t>(t)] += Zrk * Lkj;                    // row r_t, term k
+        acc[static_cast<std::size_t>(s)] += Zrk * values[begin + 1 + t];  // row k, term r_t
       }
     }
     double diag = 1.0 / (Ljj * Ljj);
@@ -70,6 +88,7 @@ void SparseMarginals::computeSelectedInverse() const {
       diag -= values[begin + 1 + t] * Zrj / Ljj;                    // (T2)
     }
     Z[static_cast<std::size_t>(begin)] = diag;
+    done[static_cast<std::size_t>(j)] = 1;
   }
 }
 
@@ -79,9 +98,9 @@ double SparseMarginals::covariance(Eigen::Index i, Eigen::Index j) const {
     throw std::out_of_range("SparseMarginals: entry (" + std::to_string(i) + ", " + std::to_string(j) +
                             ") outside a " + std::to_string(n) + "-variable system");
   }
-  if (impl_->Z.empty()) computeSelectedInverse();
   const int a = impl_->position[i], c = impl_->position[j];
   const int col = std::min(a, c), row = std::max(a, c);
+  if (impl_->Z.empty() || !impl_->done[static_cast<std::size_t>(col)]) computeColumnsFor(col);
   const Eigen::SparseMatrix<double>& L = impl_->L();
   const int* rows = L.innerIndexPtr();
   const int* first = rows + L.outerIndexPtr()[col];

@@ -10,7 +10,9 @@
 //   Z_jj = 1 / L_jj^2 - (1 / L_jj) sum_{k > j, L_kj != 0} Z_kj L_kj          (T2)
 // Every Z_ik needed lies in the pattern of L (the rows of column j below the diagonal form
 // a clique of the filled graph), so the recurrences never leave it: the cost is that of the
-// factorisation, O(sum_j |L_*j|^2), with no dense N-row matrix anywhere.
+// factorisation, O(sum_j |L_*j|^2), with no dense N-row matrix anywhere. Column j needs
+// only the columns of its ancestors in the elimination tree, so the columns are computed
+// lazily, those of one marginal at a time.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
@@ -36,9 +38,11 @@ class SparseMarginals {
 
   /// Sigma_ij. Requires (i, j) in the pattern of the factor, which holds every entry
   /// stored in H (explicit zeros included): e.g. the diagonal block of a variable whose
-  /// block H stores in full. Computes the whole selected inverse on the first call (T1, T2);
-  /// later calls cost a binary search. Throws std::out_of_range for an entry not in the
-  /// pattern.
+  /// block H stores in full. Computes (T1, T2) the columns of the selected inverse on the
+  /// path from the entry's column to the root of the elimination tree, unless an earlier
+  /// read did: reading every marginal costs one full pass, a single one only its path; an
+  /// entry already computed costs a binary search. Throws std::out_of_range for an entry not
+  /// in the pattern.
   double covariance(Eigen::Index i, Eigen::Index j) const;
 
   /// The n x n diagonal block of Sigma starting at `first`.
@@ -52,7 +56,8 @@ class SparseMarginals {
   }
 
  private:
-  void computeSelectedInverse() const;
+  /// Computes the columns of Z that column `column` needs (its elimination-tree path).
+  void computeColumnsFor(int column) const;
 
   struct Impl;
   std::unique_ptr<Impl> impl_;
