@@ -1,5 +1,6 @@
 #pragma once
 // Runs the `seif` executable as a user would and captures what it prints.
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -11,9 +12,10 @@
 namespace seif::test {
 
 struct CliResult {
-  int status = -1;
+  int status = -1;  // 124 when stopped by the time limit
   std::string out;
   std::string err;
+  double seconds = 0.0;  // wall time
 };
 
 /// A fresh scratch folder under the system temp dir.
@@ -33,13 +35,18 @@ inline std::string slurp(const std::filesystem::path& file) {
   return ss.str();
 }
 
-/// Runs `seif <args>` (args are passed to the shell as written).
-inline CliResult runCli(const std::string& args) {
+/// Runs `seif <args>` (args are passed to the shell as written). With `timeout_seconds` > 0
+/// the run (and any process it forks) is stopped after that long and the status is 124.
+inline CliResult runCli(const std::string& args, int timeout_seconds = 0) {
   const auto dir = scratchDir("cli");
-  const std::string cmd = std::string(SEIF_CLI_PATH) + " " + args + " >" +
+  const std::string limit =
+      timeout_seconds > 0 ? "timeout -k 5 " + std::to_string(timeout_seconds) + " " : std::string();
+  const std::string cmd = limit + std::string(SEIF_CLI_PATH) + " " + args + " >" +
                           (dir / "out").string() + " 2>" + (dir / "err").string() + " </dev/null";
+  const auto start = std::chrono::steady_clock::now();
   const int raw = std::system(cmd.c_str());
   CliResult r;
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
   r.out = slurp(dir / "out");
   r.err = slurp(dir / "err");

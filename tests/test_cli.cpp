@@ -1,5 +1,8 @@
 // The command-line tool end to end, as a user runs it.
 #include "cli_support.hpp"
+#include "options.hpp"
+
+#include <seif/core/errors.hpp>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -158,4 +161,187 @@ TEST(CliMrclam, SlamBeatsDeadReckoningOnAllFiveRobots) {
     }
   }
   std::filesystem::remove_all(dir);
+}
+
+// ---- every command-line input is checked where it enters ----------------------------------
+
+namespace {
+
+/// A command line that must be refused before any work: usage errors (bad flag values) exit
+/// 1, an unusable --out exits 2, each with a message naming the flag or the path.
+struct BadInput {
+  const char* name;
+  std::string args;     // {out}: a fresh path in a scratch folder; {file}: an existing file
+  int status;
+  std::string message;  // expected in stderr, with the same substitutions
+};
+
+void PrintTo(const BadInput& c, std::ostream* os) { *os << "seif " << c.args; }
+
+void replaceAll(std::string& s, const std::string& from, const std::string& to) {
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) {
+    s.replace(at, from.size(), to);
+  }
+}
+
+// Cheap settings, so that a value wrongly accepted fails fast instead of running for hours.
+const std::string kRun = "run --dataset / --out {out} ";
+const std::string kSimulate = "simulate --out {out} ";
+const std::string kPaper = "paper --runs 1 --no-figures --out {out} ";
+const std::string kBench =
+    "bench --filters seif --landmarks 100 --window 10 --repeat 1 --no-figure --out {out} ";
+const std::string kInt = "must be an integer in [1, 2147483647], found ";
+const std::string kSeed = "must be an integer in [0, 18446744073709551615], found ";
+
+const std::vector<BadInput> kBadInputs = {
+    // Noise sigmas (and bench's budgets): finite and > 0.
+    {"run_sigma_v_nan", kRun + "--sigma-v nan", 1, "--sigma-v: must be finite and > 0, found nan"},
+    {"run_sigma_w_inf", kRun + "--sigma-w inf", 1, "--sigma-w: must be finite and > 0, found inf"},
+    {"run_sigma_range_zero", kRun + "--sigma-range 0", 1, "--sigma-range: must be finite and > 0, found 0"},
+    {"run_sigma_bearing_negative", kRun + "--sigma-bearing -0.1", 1,
+     "--sigma-bearing: must be finite and > 0, found -0.1"},
+    {"run_sigma_v_overflow", kRun + "--sigma-v 1e999", 1, "--sigma-v: must be finite and > 0, found 1e999"},
+    {"bench_max_seconds_nan", kBench + "--max-seconds nan", 1,
+     "--max-seconds: must be finite and > 0, found nan"},
+    {"bench_max_memory_inf", kBench + "--max-memory-gb inf", 1,
+     "--max-memory-gb: must be finite and > 0, found inf"},
+    // Seeds: integers in [0, 2^64 - 1], never wrapped or saturated.
+    {"simulate_seed_negative", kSimulate + "--seed -1", 1, "--seed: " + kSeed + "-1"},
+    {"simulate_seed_overflow", kSimulate + "--seed 99999999999999999999", 1,
+     "--seed: " + kSeed + "99999999999999999999"},
+    {"run_seed_negative", kRun + "--seed -1", 1, "--seed: " + kSeed + "-1"},
+    {"paper_seed_negative", kPaper + "--seed -3", 1, "--seed: " + kSeed + "-3"},
+    {"paper_seeds_past_2_64", "paper --runs 2 --no-figures --out {out} --seed 18446744073709551615", 1,
+     "--seed + --runs - 1 must be at most 18446744073709551615"},
+    {"bench_seed_negative", kBench + "--seed -1", 1, "--seed: " + kSeed + "-1"},
+    {"bench_world_seed_negative", kBench + "--world-seed -1", 1, "--world-seed: " + kSeed + "-1"},
+    // --relax: an int >= 0.
+    {"run_relax_overflow", kRun + "--relax 99999999999", 1,
+     "--relax: must be an integer in [0, 2147483647], found 99999999999"},
+    {"run_relax_negative", kRun + "--relax -1", 1,
+     "--relax: must be an integer in [0, 2147483647], found -1"},
+    {"run_relax_nan", kRun + "--relax nan", 1, "--relax: must be an integer in [0, 2147483647], found nan"},
+    // The other integer flags.
+    {"simulate_landmarks_nan", kSimulate + "--landmarks nan", 1, "--landmarks: " + kInt + "nan"},
+    {"simulate_landmarks_overflow", kSimulate + "--landmarks 99999999999", 1,
+     "--landmarks: " + kInt + "99999999999"},
+    {"simulate_steps_inf", kSimulate + "--steps inf", 1, "--steps: " + kInt + "inf"},
+    {"simulate_steps_negative", kSimulate + "--steps -5", 1, "--steps: " + kInt + "-5"},
+    {"run_active_nan", kRun + "--active nan", 1, "--active: must be an integer in [1, 39], found nan"},
+    {"run_active_too_many", kRun + "--active 40", 1, "--active: must be an integer in [1, 39], found 40"},
+    {"run_robot_inf", kRun + "--robot inf", 1, "--robot: must be an integer in [1, 5], found inf"},
+    {"run_outlier_gate_nan", kRun + "--outlier-gate nan", 1, "--outlier-gate: must be > 0 (or inf), found nan"},
+    {"run_outlier_gate_zero", kRun + "--outlier-gate 0", 1, "--outlier-gate: must be > 0 (or inf), found 0"},
+    {"paper_runs_nan", kPaper + "--runs nan", 1, "--runs: " + kInt + "nan"},
+    {"paper_runs_overflow", kPaper + "--runs 99999999999", 1, "--runs: " + kInt + "99999999999"},
+    {"paper_runs_negative", kPaper + "--runs -1", 1, "--runs: " + kInt + "-1"},
+    {"paper_jobs_negative", kPaper + "--jobs -1", 1, "--jobs: " + kInt + "-1"},
+    {"paper_jobs_inf", kPaper + "--jobs inf", 1, "--jobs: " + kInt + "inf"},
+    {"paper_sweep_active_nan", kPaper + "--sweep-active 4,nan", 1,
+     "--sweep-active: must be an integer in [1, 39], found nan"},
+    {"paper_sweep_active_negative", kPaper + "--sweep-active 4,-6", 1,
+     "--sweep-active: must be an integer in [1, 39], found -6"},
+    {"bench_landmarks_nan", kBench + "--landmarks 100,nan", 1,
+     "--landmarks: must be an integer in [1, 100000000], found nan"},
+    {"bench_landmarks_overflow", kBench + "--landmarks 100,99999999999", 1,
+     "--landmarks: must be an integer in [1, 100000000], found 99999999999"},
+    {"bench_landmarks_negative", kBench + "--landmarks -5", 1,
+     "--landmarks: must be an integer in [1, 100000000], found -5"},
+    {"bench_window_overflow", kBench + "--window 99999999999", 1,
+     "--window: must be an integer in [1, 1000000], found 99999999999"},
+    {"bench_repeat_nan", kBench + "--repeat nan", 1, "--repeat: must be an integer in [1, 100], found nan"},
+    {"bench_active_inf", kBench + "--active inf", 1, "--active: must be an integer in [1, 39], found inf"},
+    // --out: checked before any work (a paper of 100000 runs would take hours; a uniform
+    // world of 2^31-1 landmarks is refused by the simulator, after the --out check).
+    {"run_out_empty", "run --dataset / --out ''", 1, "--out: must not be empty"},
+    {"run_out_under_file", "run --dataset / --out {file}/sub", 2, "{file}/sub: cannot create folder"},
+    {"run_out_is_file", "run --dataset / --out {file}", 2, "{file}: output path exists and is not a folder"},
+    {"paper_out_empty", "paper --runs 100000 --out ''", 1, "--out: must not be empty"},
+    {"paper_out_under_file", "paper --runs 100000 --out {file}/sub", 2, "{file}/sub: cannot create folder"},
+    {"paper_out_is_file", "paper --runs 100000 --out {file}", 2,
+     "{file}: output path exists and is not a folder"},
+    {"bench_out_under_file", "bench --no-figure --out {file}/sub", 2, "{file}/sub: cannot create folder"},
+    {"bench_out_is_file", "bench --no-figure --out {file}", 2,
+     "{file}: output path exists and is not a folder"},
+    {"simulate_out_under_file", "simulate --preset uniform --landmarks 2147483647 --out {file}/sub", 2,
+     "{file}/sub: cannot create folder"},
+    {"simulate_out_is_file", "simulate --preset uniform --landmarks 2147483647 --out {file}", 2,
+     "{file}: output path exists and is not a folder"},
+};
+
+class CliInput : public ::testing::TestWithParam<BadInput> {};
+
+}  // namespace
+
+TEST_P(CliInput, IsRefusedBeforeAnyWork) {
+  const BadInput& c = GetParam();
+  const auto dir = scratchDir("input");
+  std::ofstream(dir / "file") << "not a folder\n";
+  auto substitute = [&](std::string s) {
+    replaceAll(s, "{out}", (dir / "out").string());
+    replaceAll(s, "{file}", (dir / "file").string());
+    return s;
+  };
+  const auto r = runCli(substitute(c.args), 60);
+  EXPECT_EQ(r.status, c.status) << r.err;
+  EXPECT_NE(r.err.find(substitute(c.message)), std::string::npos) << r.err;
+  EXPECT_LT(r.seconds, 20.0);
+  EXPECT_EQ(r.out, "");
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  if (c.status == 2) {
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(Flags, CliInput, ::testing::ValuesIn(kBadInputs),
+                         [](const ::testing::TestParamInfo<BadInput>& p) {
+                           return std::string(p.param.name);
+                         });
+
+// The flags' rule for the noise sigmas (finite and > 0) holds for the values a run ends up
+// with, whichever their source: a dataset whose meta.json has a zero sigma is bad data.
+TEST(Cli, ZeroNoiseFromTheDatasetIsRefused) {
+  const auto dir = scratchDir("zero-noise");
+  ASSERT_EQ(runCli("simulate --preset paper --steps 20 --seed 4 --out " + (dir / "W").string()).status, 0);
+  auto meta = readJson(dir / "W" / "meta.json");
+  meta["noise"]["sigma_v"] = 0.0;
+  std::ofstream(dir / "W" / "meta.json") << meta.dump(2) << "\n";
+  const auto r =
+      runCli("run --dataset " + (dir / "W").string() + " --filter ekf --out " + (dir / "R").string());
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("sigma_v"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  std::filesystem::remove_all(dir);
+}
+
+// Integers are read as decimal: CLI11 alone reads 010 as octal (8).
+TEST(Cli, IntegerFlagsAreDecimal) {
+  const auto dir = scratchDir("decimal");
+  const auto r = runCli("simulate --preset paper --landmarks 010 --steps 010 --seed 010 --out " +
+                        (dir / "W").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("10 landmarks, 10 steps, seed 10,"), std::string::npos) << r.out;
+  std::filesystem::remove_all(dir);
+}
+
+// The same rule inside NoiseFlags::resolve, for the final values whichever their source: a
+// bad flag value is a usage error, a bad dataset value (meta.json) is bad data.
+TEST(Cli, NoiseFlagsResolveRequiresFinitePositiveSigmas) {
+  seif::NoiseModel zero_v = seif::cli::mrclamDefaultNoise();
+  zero_v.sigma_v = 0.0;  // zero control noise: refused too
+  seif::cli::NoiseFlags flags;
+  EXPECT_THROW(flags.resolve(zero_v), seif::ModelError);
+  flags.sigma_v = 0.01;  // a valid flag overrides it
+  EXPECT_EQ(flags.resolve(zero_v).sigma_v, 0.01);
+  flags.sigma_w = std::nan("");
+  try {
+    flags.resolve(std::nullopt);
+    ADD_FAILURE() << "a nan --sigma-w was accepted";
+  } catch (const seif::ModelError& e) {
+    ADD_FAILURE() << "a flag's value is not bad data: " << e.what();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--sigma-w: must be finite and > 0, found nan"), std::string::npos)
+        << e.what();
+  }
 }

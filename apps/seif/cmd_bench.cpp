@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -382,6 +383,7 @@ nlohmann::json targets(const std::vector<BenchMeasurement>& all) {
 // ---------------------------------------------------------------- the command ----------
 
 void bench(const BenchArgs& args) {
+  requireOutputFolder(args.out);
   std::vector<int> sizes = args.landmarks;
   std::sort(sizes.begin(), sizes.end());
   sizes.erase(std::unique(sizes.begin(), sizes.end()), sizes.end());
@@ -391,7 +393,6 @@ void bench(const BenchArgs& args) {
   }
   const SeifOptions seif_options = args.seif.resolve();
   const std::filesystem::path dir(args.out);
-  std::filesystem::create_directories(dir);
   // A child that runs far past its estimate is stopped (the estimate was wrong).
   const auto timeout = static_cast<unsigned>(std::min(86400.0, 10.0 * args.max_seconds + 60.0));
 
@@ -515,24 +516,26 @@ void addBenchCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--landmarks", args->landmarks, "comma-separated map sizes N")
       ->delimiter(',')
-      ->check(CLI::Range(1, 100000000))
+      ->transform(integerIn(1, 100000000))
       ->capture_default_str();
   cmd->add_option("--window", args->window, "steps timed at the end of the corridor (at most half of them)")
-      ->check(CLI::PositiveNumber)
+      ->transform(integerIn(1, 1000000))
       ->capture_default_str();
   cmd->add_option("--repeat", args->repeat,
                   "runs per case, each in its own process; the one with the lowest median is reported")
-      ->check(CLI::Range(1, 100))
+      ->transform(integerIn(1, 100))
       ->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->capture_default_str();
-  cmd->add_option("--world-seed", args->world_seed, "seed of the simulated corridor")->capture_default_str();
+  cmd->add_option("--world-seed", args->world_seed, "seed of the simulated corridor")
+      ->transform(seedValue())
+      ->capture_default_str();
   cmd->add_option("--max-seconds", args->max_seconds,
                   "skip a case whose estimated run time exceeds this many seconds")
-      ->check(CLI::PositiveNumber)
+      ->check(positiveFinite())
       ->capture_default_str();
   cmd->add_option("--max-memory-gb", args->max_memory_gb,
                   "skip a case whose estimated peak memory exceeds this many GB")
-      ->check(CLI::PositiveNumber)
+      ->check(positiveFinite())
       ->capture_default_str();
   cmd->add_flag("--no-figure", args->no_figure, "do not render OUT/bench.png");
   args->seif.add(*cmd);

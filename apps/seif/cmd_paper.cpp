@@ -10,9 +10,11 @@
 #include <seif/eval/paper.hpp>
 #include <seif/eval/stats.hpp>
 #include <seif/filters/information_ops.hpp>
+#include <seif/io/atomic_file.hpp>
 
 #include <algorithm>
 #include <atomic>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -248,6 +250,13 @@ nlohmann::json figureData(const SlamFilter& filter, const RunOutput& out, const 
 }
 
 void paperCommand(const PaperArgs& args) {
+  // Run r uses seed SEED + r: the last one must not wrap past 2^64 - 1.
+  if (args.seed > UINT64_MAX - static_cast<std::uint64_t>(args.runs - 1)) {
+    throw std::invalid_argument("--seed + --runs - 1 must be at most " + std::to_string(UINT64_MAX) +
+                                ", found " + std::to_string(args.seed) + " + " + std::to_string(args.runs) +
+                                " - 1");
+  }
+  requireOutputFolder(args.out);
   PaperOptions options;
   options.sweep_active = args.sweep_active;
   options.path = parsePaperPath(args.path);
@@ -576,7 +585,7 @@ void paperCommand(const PaperArgs& args) {
 
   // ---- table.md ----
   {
-    std::ofstream md(dir / "table.md");
+    std::ostringstream md;
     md << "# The paper's experiment (Thrun et al. 2002, §4), reproduced\n\n";
     md << "`seif paper --runs " << total << " --seed " << args.seed << "`: " << n_runs
        << " runs of the paper world (" << args.path << " path, " << world.landmarks << " landmarks, " << world.steps
@@ -599,7 +608,7 @@ void paperCommand(const PaperArgs& args) {
       md << sweep.markdown();
     }
     if (!failed.empty()) md << "\n" << failed.size() << " run(s) failed and are left out (results.json: failed_runs).\n";
-    if (!md) throw DataError((dir / "table.md").string(), 0, "write failed");
+    writeFileAtomically(dir / "table.md", md.str());
   }
 
   // ---- figures ----
@@ -654,15 +663,18 @@ void addPaperCommand(CLI::App& app) {
       "fig2_seif.png, fig6_compare.png (and sweep_active.png), rendered by\n"
       "scripts/figures/paper.py with /usr/bin/python3 and matplotlib.");
   cmd->add_option("--runs", args->runs, "number of independent runs")
-      ->check(CLI::PositiveNumber)
+      ->transform(integerIn(1, INT_MAX))
       ->capture_default_str();
-  cmd->add_option("--seed", args->seed, "simulator seed of run 0 (run r: seed + r)")->capture_default_str();
-  cmd->add_option("--jobs", args->jobs, "threads (default: the number of cores)")->check(CLI::PositiveNumber);
+  cmd->add_option("--seed", args->seed, "simulator seed of run 0 (run r: seed + r, at most 2^64-1)")
+      ->transform(seedValue())
+      ->capture_default_str();
+  cmd->add_option("--jobs", args->jobs, "threads (default: the number of cores)")
+      ->transform(integerIn(1, INT_MAX));
   cmd->add_option("--out", args->out, "output folder")->capture_default_str();
   cmd->add_option("--sweep-active", args->sweep_active,
                   "also run the constant-time SEIF with each theta_x listed, e.g. 4,6,10,20")
       ->delimiter(',')
-      ->check(CLI::Range(1, kMaxLocalLandmarks - 1));
+      ->transform(integerIn(1, kMaxLocalLandmarks - 1));
   cmd->add_option("--path", args->path,
                   "the robot's path: lawnmower (a survey of the square, 1.75 laps) or lissajous (a\n"
                   "3:2 Lissajous curve crossing itself, 1.6 laps); docs/simulator.md")

@@ -8,6 +8,8 @@
 #include <seif/io/results.hpp>
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -21,6 +23,7 @@ struct RunArgs {
   std::string out = "out/run";
   NoiseFlags noise;
   SeifFlags seif;
+  double outlier_gate = FilterConfig{}.outlier_gate;
 };
 
 nlohmann::json optionalJson(const std::optional<double>& v) {
@@ -28,13 +31,19 @@ nlohmann::json optionalJson(const std::optional<double>& v) {
 }
 
 void run(const RunArgs& args) {
+  requireOutputFolder(args.out);  // before any work: a bad --out fails at once
+  using Clock = std::chrono::steady_clock;
+  const auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  const auto read_start = Clock::now();
   const RobotLog log = readMrclam(args.dataset, args.robot);
   const Dataset data = buildDataset(log);
   if (data.steps.empty()) {
     throw DataError(args.dataset, 0, "robot " + std::to_string(args.robot) + " has no odometry to run");
   }
+  const double read_seconds = seconds_since(read_start);
   FilterConfig config;
   config.noise = args.noise.resolve(data.noise);
+  config.outlier_gate = args.outlier_gate;
   const SeifOptions seif_options = args.seif.resolve();
   const Pose2 start = startPose(data);
   auto filter = makeFilter(args.filter, start, config, seif_options);
@@ -56,8 +65,10 @@ void run(const RunArgs& args) {
 
   const std::filesystem::path dir(args.out);
   std::filesystem::create_directories(dir);
+  const auto write_start = Clock::now();
   writeTum(dir / "trajectory.tum", out.trajectory);
-  writeMapCsv(dir / "map.csv", *filter);
+  writeMapCsv(dir / "map.csv", *filter);  // the marginal covariances are computed here
+  const double write_seconds = seconds_since(write_start);
   std::vector<double> sorted = out.step_seconds;
   std::sort(sorted.begin(), sorted.end());
   const double median_us = sorted.empty() ? 0.0 : 1e6 * sorted[sorted.size() / 2];
@@ -69,6 +80,8 @@ void run(const RunArgs& args) {
       {"steps", data.steps.size()},
       {"landmarks", filter->landmarkIds().size()},
       {"seconds", out.seconds},
+      {"seconds_read", read_seconds},
+      {"seconds_trajectory_and_map", write_seconds},
       {"us_per_step", data.steps.empty() ? 0.0 : 1e6 * out.seconds / static_cast<double>(data.steps.size())},
       {"us_per_step_median", median_us},
       {"links", out.final_stats.links},
@@ -76,6 +89,8 @@ void run(const RunArgs& args) {
       {"max_robot_links", out.max_robot_links},
       {"max_landmark_links", out.final_stats.max_landmark_links},
       {"max_blocks_touched", out.max_blocks_touched},
+      {"rejected_observations", out.rejected_observations},
+      {"outlier_gate_sigmas", std::isinf(config.outlier_gate) ? nlohmann::json(nullptr) : nlohmann::json(config.outlier_gate)},
       {"landmark_rmse", optionalJson(map_rmse)},
       {"ate_rmse", optionalJson(ate)},
       {"dead_reckoning_ate_rmse", optionalJson(dr_ate)},
@@ -104,6 +119,12 @@ void run(const RunArgs& args) {
   std::printf("  unaligned: landmark RMSE %s m | ATE %s m | dead-reckoning ATE %s m | links %zu\n",
               fmt(map_rmse_raw).c_str(), fmt(ate_raw).c_str(), fmt(dr_ate_raw).c_str(),
               out.final_stats.links);
+  std::printf("  time: read %.2f s | filter %.2f s | trajectory and map with covariances %.2f s\n",
+              read_seconds, out.seconds, write_seconds);
+  if (out.rejected_observations > 0) {
+    std::printf("  rejected %zu gross outlier observation%s (beyond %g sigma of the measurement noise)\n",
+                out.rejected_observations, out.rejected_observations == 1 ? "" : "s", config.outlier_gate);
+  }
   std::printf("  wrote %s/{trajectory.tum,map.csv,metrics.json}\n", args.out.c_str());
 }
 
@@ -122,12 +143,22 @@ void addRunCommand(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--robot", args->robot, "robot number in the dataset")
-      ->check(CLI::Range(1, 5))
+      ->transform(integerIn(1, 5))
       ->capture_default_str();
   cmd->add_option("--filter", args->filter, "ekf (dense covariance), eif (dense information) or seif")
       ->check(CLI::IsMember({"ekf", "eif", "seif"}))
       ->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->capture_default_str();
+  cmd->add_option("--outlier-gate", args->outlier_gate,
+                  "reject an observation whose innovation exceeds this many measurement standard "
+                  "deviations (a gross outlier; counted in metrics.json rejected_observations); "
+                  "'inf' disables the gate")
+      ->check([](const std::string& s) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(s, v) || !(v > 0.0)) return "must be > 0 (or inf), found " + s;
+        return {};
+      })
+      ->capture_default_str();
   args->noise.add(*cmd);
   args->seif.add(*cmd);
   cmd->callback([args] { run(*args); });

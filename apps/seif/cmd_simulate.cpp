@@ -5,6 +5,7 @@
 #include <seif/io/mrclam.hpp>
 #include <seif/sim/world.hpp>
 
+#include <climits>
 #include <cstdio>
 
 namespace seif::cli {
@@ -20,6 +21,7 @@ struct SimulateArgs {
 };
 
 void simulateCommand(const SimulateArgs& args) {
+  requireOutputFolder(args.out);
   WorldConfig config = presetConfig(parseWorldPreset(args.preset), args.landmarks, args.steps, args.seed);
   config.paper_path = parsePaperPath(args.path);
   SimStats stats;
@@ -51,10 +53,12 @@ void addSimulateCommand(CLI::App& app) {
       ->check(CLI::IsMember({"lawnmower", "lissajous"}))
       ->capture_default_str();
   cmd->add_option("--landmarks", args->landmarks, "number of landmarks (default: the preset's)")
-      ->check(CLI::PositiveNumber);
+      ->transform(integerIn(1, INT_MAX));
   cmd->add_option("--steps", args->steps, "number of control steps (default: the preset's)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--seed", args->seed, "seed of all randomness")->capture_default_str();
+      ->transform(integerIn(1, INT_MAX));
+  cmd->add_option("--seed", args->seed, "seed of all randomness")
+      ->transform(seedValue())
+      ->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->required();
   cmd->callback([args] { simulateCommand(*args); });
 }

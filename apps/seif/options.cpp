@@ -1,18 +1,95 @@
 #include "options.hpp"
 
 #include <seif/core/errors.hpp>
+#include <seif/filters/information_ops.hpp>
+#include <seif/io/atomic_file.hpp>
 
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
 
+#include <charconv>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string_view>
+#include <system_error>
 
 namespace seif::cli {
+
+namespace {
+
+/// `text` without one leading '+' (std::from_chars accepts '-' only).
+std::string_view withoutPlus(const std::string& text) {
+  std::string_view s(text);
+  if (s.size() > 1 && s[0] == '+' && s[1] != '-' && s[1] != '+') s.remove_prefix(1);
+  return s;
+}
+
+/// The whole of `text` as a T (std::from_chars: decimal, no spaces), or nothing.
+template <typename T>
+std::optional<T> parseAll(const std::string& text) {
+  const std::string_view s = withoutPlus(text);
+  T value{};
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
+  if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
+  return value;
+}
+
+std::string number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+bool isPositiveFinite(double v) { return std::isfinite(v) && v > 0.0; }
+
+CLI::Validator positiveFinite() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string {
+        const auto v = parseAll<double>(input);
+        if (v && isPositiveFinite(*v)) return {};
+        return "must be finite and > 0, found " + input;
+      },
+      "FINITE > 0");
+}
+
+CLI::Validator integerIn(long long lo, long long hi) {
+  const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  return CLI::Validator(
+      [lo, hi, range](std::string& input) -> std::string {
+        const auto v = parseAll<long long>(input);
+        if (!v || *v < lo || *v > hi) return "must be an integer in " + range + ", found " + input;
+        input = std::to_string(*v);  // canonical: CLI11 would read 010 as octal
+        return {};
+      },
+      range);
+}
+
+CLI::Validator seedValue() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string {
+        // from_chars reads no sign into an unsigned type: "-1" is refused, not wrapped.
+        const auto v = parseAll<std::uint64_t>(input);
+        if (!v) return "must be an integer in [0, " + std::to_string(UINT64_MAX) + "], found " + input;
+        input = std::to_string(*v);
+        return {};
+      },
+      "[0, 2^64-1]");
+}
+
+void requireOutputFolder(const std::string& out) {
+  if (out.empty()) throw std::invalid_argument("--out: must not be empty");
+  requireWritableDirectory(out);
+}
 
 NoiseModel mrclamDefaultNoise() {
   NoiseModel n;
@@ -29,7 +106,7 @@ NoiseModel mrclamDefaultNoise() {
 }
 
 void NoiseFlags::add(CLI::App& cmd) {
-  auto positive = CLI::PositiveNumber;
+  const CLI::Validator positive = positiveFinite();
   cmd.add_option("--sigma-v", sigma_v, "forward-velocity noise std [m/s]")->check(positive);
   cmd.add_option("--sigma-w", sigma_w, "rotational-velocity noise std [rad/s]")->check(positive);
   cmd.add_option("--sigma-range", sigma_range, "range noise std [m]")->check(positive);
@@ -42,9 +119,22 @@ NoiseModel NoiseFlags::resolve(const std::optional<NoiseModel>& dataset_noise) c
   if (sigma_w) n.sigma_w = *sigma_w;
   if (sigma_range) n.sigma_range = *sigma_range;
   if (sigma_bearing) n.sigma_bearing = *sigma_bearing;
-  // Information filters need a positive measurement noise; zero control noise is fine.
-  if (!(n.sigma_range > 0) || !(n.sigma_bearing > 0)) {
-    throw std::invalid_argument("measurement noise must be positive (--sigma-range, --sigma-bearing)");
+  // The flags were checked as they were parsed; this covers the final values, whichever
+  // their source (a flag set in code, the dataset's meta.json).
+  const struct {
+    const char* flag;
+    const char* key;
+    const std::optional<double>& given;
+    double value;
+  } sigmas[] = {{"--sigma-v", "sigma_v", sigma_v, n.sigma_v},
+                {"--sigma-w", "sigma_w", sigma_w, n.sigma_w},
+                {"--sigma-range", "sigma_range", sigma_range, n.sigma_range},
+                {"--sigma-bearing", "sigma_bearing", sigma_bearing, n.sigma_bearing}};
+  for (const auto& s : sigmas) {
+    if (isPositiveFinite(s.value)) continue;
+    const std::string rule = " must be finite and > 0, found " + number(s.value);
+    if (s.given) throw std::invalid_argument(std::string(s.flag) + ":" + rule);
+    throw ModelError(std::string("the dataset's noise ") + s.key + " (meta.json)" + rule);
   }
   return n;
 }
@@ -52,11 +142,11 @@ NoiseModel NoiseFlags::resolve(const std::optional<NoiseModel>& dataset_noise) c
 void SeifFlags::add(CLI::App& cmd) {
   cmd.add_option("--active", active,
                  "SEIF: theta_x, landmarks kept linked to the robot (the paper: 6)")
-      ->check(CLI::Range(1, 39))
+      ->transform(integerIn(1, kMaxLocalLandmarks - 1))
       ->capture_default_str();
   cmd.add_option("--relax", relax,
                  "SEIF: K, landmarks relaxed per step besides the robot and the active ones")
-      ->check(CLI::NonNegativeNumber)
+      ->transform(integerIn(0, INT_MAX))
       ->capture_default_str();
   cmd.add_option("--mean", mean,
                  "SEIF mean recovery: amortized (constant time) or exact (sparse Cholesky each step)")
@@ -77,6 +167,7 @@ void SeifFlags::add(CLI::App& cmd) {
       ->check(CLI::IsMember({"random", "cyclic"}))
       ->capture_default_str();
   cmd.add_option("--seed", seed, "SEIF: seed of the random choice of relaxed landmarks")
+      ->transform(seedValue())
       ->capture_default_str();
 }
 
@@ -183,11 +274,7 @@ bool renderFigure(const std::string& script, const std::vector<std::string>& arg
 }
 
 void writeJson(const std::string& file, const nlohmann::json& j) {
-  const std::filesystem::path p(file);
-  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
-  std::ofstream out(p);
-  out << j.dump(2) << "\n";
-  if (!out) throw DataError(file, 0, "write failed");
+  writeFileAtomically(file, j.dump(2) + "\n");
 }
 
 }  // namespace seif::cli

@@ -6,18 +6,42 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace seif::cli {
 
+// Validators of flag values, applied to the value as typed before CLI11 converts it (CLI11
+// alone lets nan through CLI::PositiveNumber, wraps `--seed -1` to 2^64-1, saturates seeds
+// past 2^64 and reads 010 as octal). A bad value is a usage error (exit 1) whose message
+// names the flag: "--sigma-v: must be finite and > 0, found nan".
+
+/// The noise sigmas' rule (the same as meta.json's): a finite number > 0.
+bool isPositiveFinite(double v);
+/// A decimal number satisfying isPositiveFinite: the sigma flags and bench's budgets.
+CLI::Validator positiveFinite();
+/// A decimal integer in [lo, hi] (no fraction, exponent, nan or inf), passed on to the
+/// conversion in canonical form (so 010 is ten). Add it with Option::transform(): check()
+/// would drop the canonical form.
+CLI::Validator integerIn(long long lo, long long hi);
+/// A seed: a decimal integer in [0, 2^64 - 1]; like integerIn, for Option::transform().
+CLI::Validator seedValue();
+
+/// Checks a command's output folder before any work: empty is a usage error
+/// (std::invalid_argument); otherwise seif::requireWritableDirectory, which creates the
+/// folder and throws DataError naming it when it is not a folder or not writable (exit 2).
+void requireOutputFolder(const std::string& out);
+
 /// Noise of the MRCLAM robots when a dataset has no meta.json (iRobot Create velocity
 /// commands, camera range and bearing): tuned once on dataset 6 and documented in README.
 NoiseModel mrclamDefaultNoise();
 
 /// --sigma-v/--sigma-w/--sigma-range/--sigma-bearing; unset flags fall back to the
-/// dataset's meta.json noise, then to mrclamDefaultNoise().
+/// dataset's meta.json noise, then to mrclamDefaultNoise(). Every sigma must be finite and
+/// > 0 (isPositiveFinite): a bad flag is a usage error (std::invalid_argument), a bad value
+/// from the dataset is bad data (ModelError).
 struct NoiseFlags {
   std::optional<double> sigma_v, sigma_w, sigma_range, sigma_bearing;
   void add(CLI::App& cmd);
