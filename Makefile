@@ -4,7 +4,7 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 OUT ?= out
 
-.PHONY: deps configure build test run bench clean
+.PHONY: deps configure build test run bench clean sanitize fuzz
 
 deps:
 	@scripts/install-deps
@@ -25,6 +25,23 @@ run: build
 
 bench: build
 	@$(BUILD_DIR)/bin/seif_bench --benchmark_min_time=0.2
+
+# The whole test suite under AddressSanitizer + UndefinedBehaviorSanitizer, in its own
+# tree (build-sanitize; the benchmarks are not built). Any report fails the run; a
+# sanitized process exits 99, so a test expecting the CLI to fail (status 1 or 2) cannot
+# mistake a report for the failure it wanted.
+sanitize: export ASAN_OPTIONS = detect_leaks=1:halt_on_error=1:exitcode=99:print_stacktrace=1:check_initialization_order=1:strict_init_order=1:detect_stack_use_after_return=1
+sanitize: export UBSAN_OPTIONS = halt_on_error=1:exitcode=99:print_stacktrace=1
+sanitize: deps
+	@cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEIF_SANITIZE=ON -DSEIF_BUILD_BENCH=OFF $(CMAKE_FLAGS) >/dev/null
+	@MAKEFLAGS= cmake --build build-sanitize -j $(JOBS) -- --no-print-directory
+	@cd build-sanitize && ctest --output-on-failure -j $(JOBS)
+
+# libFuzzer targets of fuzz/ (clang, ASan + UBSan), built in build-fuzz, each run for
+# FUZZ_SECONDS seconds: executions, exec/s, CPU seconds and findings per target (scripts/fuzz).
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	@FUZZ_SECONDS=$(FUZZ_SECONDS) JOBS=$(JOBS) scripts/fuzz
 
 clean:
 	@rm -rf $(BUILD_DIR)

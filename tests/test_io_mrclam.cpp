@@ -3,6 +3,8 @@
 #include <seif/core/errors.hpp>
 #include <seif/io/mrclam.hpp>
 
+#include "../fuzz/fuzz_support.hpp"
+
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -13,16 +15,19 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <random>
 #include <set>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace fs = std::filesystem;
 using namespace seif;
+using namespace std::string_literals;
 
 namespace {
 
@@ -240,6 +245,36 @@ TEST(MrclamWrite, RejectsLogsThatCouldNotBeReadBack) {
   EXPECT_TRUE(fs::is_empty(tmp.path())) << "nothing is written when the log is rejected";
 }
 
+TEST(MrclamWrite, RejectsSigmasTheReaderWouldReject) {
+  TempDir tmp;
+  RobotLog log = syntheticLog();
+  log.noise->sigma_w = 0.0;
+  expectDataError([&] { writeMrclam(tmp.path(), log); }, tmp.path() / "meta.json", 0,
+                  "\"noise.sigma_w\" must be finite and > 0, found 0");
+  log.noise->sigma_w = std::numeric_limits<double>::infinity();
+  expectDataError([&] { writeMrclam(tmp.path(), log); }, tmp.path() / "meta.json", 0,
+                  "\"noise.sigma_w\" must be finite and > 0, found inf");
+  EXPECT_TRUE(fs::is_empty(tmp.path())) << "nothing is written when the log is rejected";
+}
+
+TEST(MrclamWrite, ReplacesFilesAtomically) {
+  // Each file is written under a temporary name and renamed into place: the old file is
+  // never rewritten in place (a hard link to it keeps the old text) and no temporary remains.
+  TempDir tmp;
+  writeMrclam(tmp.path(), syntheticLog());
+  const fs::path old_odometry = tmp.path() / "old_odometry";
+  fs::create_hard_link(tmp.path() / "Robot2_Odometry.dat", old_odometry);
+  const auto before = fs::file_size(old_odometry);
+  RobotLog log = syntheticLog();
+  log.odometry.resize(3);
+  writeMrclam(tmp.path(), log);
+  EXPECT_EQ(fs::file_size(old_odometry), before);
+  EXPECT_EQ(readMrclam(tmp.path(), 2).odometry.size(), 3u);
+  for (const auto& entry : fs::directory_iterator(tmp.path())) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+  }
+}
+
 // --- the real dataset 6 ------------------------------------------------------------------
 
 namespace {
@@ -434,6 +469,147 @@ TEST_F(MrclamCorrupt, MalformedMetaJson) {
   // Every key is optional: an empty object means "no noise given".
   writeText(file("meta.json"), "{}");
   EXPECT_FALSE(readMrclam(dir(), 2).noise.has_value());
+}
+
+TEST_F(MrclamCorrupt, MetaJsonNumberOverflow) {
+  // nlohmann throws out_of_range (406) here, not parse_error: still a DataError naming the file.
+  writeText(file("meta.json"),
+            R"({"noise": {"sigma_v": 1e400, "sigma_w": 0.1, "sigma_range": 0.1, "sigma_bearing": 0.1}})");
+  expectError("meta.json", 0, "number overflow parsing '1e400'");
+  writeText(file("meta.json"), R"({"x": 1e400})");
+  expectError("meta.json", 0, "1e400");
+}
+
+TEST_F(MrclamCorrupt, MetaJsonSigmasMustBePositive) {
+  writeText(file("meta.json"),
+            R"({"noise": {"sigma_v": 0.1, "sigma_w": 0.1, "sigma_range": 0, "sigma_bearing": 0.1}})");
+  expectError("meta.json", 0, "\"noise.sigma_range\" must be finite and > 0, found 0");
+  writeText(file("meta.json"),
+            R"({"noise": {"sigma_v": 0.1, "sigma_w": -0.0, "sigma_range": 1, "sigma_bearing": 0.1}})");
+  expectError("meta.json", 0, "\"noise.sigma_w\" must be finite and > 0, found -0");
+  writeText(file("meta.json"),
+            R"({"noise": {"sigma_v": 0.1, "sigma_w": 0.1, "sigma_range": 1, "sigma_bearing": 1e-300}})");
+  EXPECT_EQ(readMrclam(dir(), 2).noise->sigma_bearing, 1e-300);
+}
+
+TEST_F(MrclamCorrupt, MetaJsonDeeplyNested) {
+  // A message used to dump() the offending value, recursing once per level: a stack overflow.
+  const std::size_t depth = 200000;
+  writeText(file("meta.json"), "{\"robot\": " + std::string(depth, '[') + std::string(depth, ']') + "}");
+  expectError("meta.json", 0, "\"robot\" must be an integer in 1..5, found an array");
+}
+
+TEST_F(MrclamCorrupt, SymbolicLinkLoop) {
+  for (const char* name : {"Robot2_Odometry.dat", "meta.json", "Robot2_Groundtruth.dat"}) {
+    SCOPED_TRACE(name);
+    writeMrclam(dir(), syntheticLog());
+    fs::remove(file(name));
+    fs::create_symlink(name, file(name));  // points at itself
+    expectError(name, 0, "symbolic-link loop");
+    fs::remove(file(name));
+  }
+}
+
+TEST_F(MrclamCorrupt, NonPrintableBytesAreEscaped) {
+  // what() is a C string: a raw NUL would cut the message after "'3.7".
+  replaceLine(file("Robot2_Measurement.dat"), kFirstDataLine,
+              "1248444187.206\t106\t3.7\0abc\x1b[2J\t-0.257"s);
+  expectError("Robot2_Measurement.dat", kFirstDataLine,
+              "bad number '3.7\\x00abc\\x1b[2J' in column 3 (range)");
+}
+
+TEST(DataErrorMessage, EscapesWhatIsNotPrintableUtf8) {
+  // Kept: valid UTF-8 (é € 😀). Escaped: controls, DEL, a stray byte, a truncated sequence,
+  // a C1 control (U+0085), a UTF-16 surrogate.
+  const DataError e("a\nb.dat", 3, "x\0y\x7f\té€😀 \xff\xc3 \xc2\x85 \xed\xa0\x80"s);
+  EXPECT_EQ(std::string(e.what()),
+            "a\\x0ab.dat:3: x\\x00y\\x7f\\x09é€😀 \\xff\\xc3 \\xc2\\x85 \\xed\\xa0\\x80");
+  EXPECT_EQ(e.file(), "a\nb.dat");  // the name as given
+}
+
+// --- in memory ---------------------------------------------------------------------------
+
+namespace {
+std::string readText(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+MrclamFiles filesOf(const fs::path& dir) {
+  MrclamFiles files;
+  files.folder = dir.string();
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    files.text.emplace(entry.path().filename().string(), readText(entry.path()));
+  }
+  return files;
+}
+
+std::string messageOf(const std::function<void()>& read) {
+  try {
+    read();
+  } catch (const DataError& e) {
+    return e.what();
+  }
+  return "no DataError";
+}
+}  // namespace
+
+TEST_F(MrclamCorrupt, InMemoryReaderMatchesTheFolderReader) {
+  const RobotLog from_memory = readMrclam(filesOf(dir()), 2);
+  EXPECT_EQ(from_memory.source, dir().string());
+  expectSameLog(readMrclam(dir(), 2), from_memory);
+
+  // The same message, file name and line included, for a damaged line and a missing file.
+  replaceLine(file("Robot2_Measurement.dat"), kFirstDataLine + 2, "1248444187.356\t107\tnan\t0.1");
+  const std::string message = messageOf([&] { readMrclam(dir(), 2); });
+  const std::string where = file("Robot2_Measurement.dat").string() + ":7: non-finite number";
+  EXPECT_NE(message.find(where), std::string::npos) << message;
+  EXPECT_EQ(messageOf([&] { readMrclam(filesOf(dir()), 2); }), message);
+  MrclamFiles files = filesOf(dir());
+  files.text.erase("Barcodes.dat");
+  EXPECT_EQ(messageOf([&] { readMrclam(files, 2); }),
+            file("Barcodes.dat").string() + ": missing required file");
+  EXPECT_EQ(messageOf([&] { readMrclam(files, 6); }),
+            dir().string() + ": robot number 6 is outside 1..5");
+}
+
+TEST(MrclamMetaJson, ReadsTextInMemory) {
+  const auto noise = readMetaJson(
+      R"({"noise": {"sigma_v": 1, "sigma_w": 2, "sigma_range": 3, "sigma_bearing": 4}})", "m");
+  ASSERT_TRUE(noise.has_value());
+  EXPECT_EQ(noise->sigma_range, 3.0);
+  EXPECT_FALSE(readMetaJson(R"({"format": "seif-mrclam", "robot": 2})", "m").has_value());
+  expectDataError([] { readMetaJson("{", "some/meta.json"); }, "some/meta.json", 0, "malformed JSON");
+  expectDataError([] { readMetaJson(R"({"robot": "1"})", "x.json"); }, "x.json", 0, "found \"1\"");
+}
+
+// Every input kept by the fuzzers (fuzz/regressions: crashes found and handcrafted nasty
+// inputs; fuzz/corpus: the seeds) is read or rejected with a DataError, nothing else.
+TEST(MrclamFuzzInputs, AreReadOrRejectedWithADataError) {
+  const fs::path fuzz_dir = fs::path(SEIF_SOURCE_DIR) / "fuzz";
+  std::size_t inputs = 0;
+  for (const char* kind : {"regressions", "corpus"}) {
+    for (const char* target : {"fuzz_mrclam", "fuzz_meta_json"}) {
+      const fs::path folder = fuzz_dir / kind / target;
+      ASSERT_TRUE(fs::is_directory(folder)) << folder;
+      for (const auto& entry : fs::directory_iterator(folder)) {
+        SCOPED_TRACE(entry.path().string());
+        const std::string input = readText(entry.path());
+        ++inputs;
+        try {
+          if (std::string_view(target) == "fuzz_mrclam") {
+            const RobotLog log = readMrclam(fuzz::splitMrclamInput(input), fuzz::kRobot);
+            EXPECT_EQ(fuzz::brokenInvariant(log), "");
+          } else if (const auto noise = readMetaJson(input, "meta.json")) {
+            EXPECT_TRUE(fuzz::isValidNoise(*noise));
+          }
+        } catch (const DataError& e) {
+          EXPECT_TRUE(fuzz::isPrintable(e.what())) << e.what();
+        }
+      }
+    }
+  }
+  EXPECT_GE(inputs, 20u);
 }
 
 TEST_F(MrclamCorrupt, CommentsBlankLinesAndMixedWhitespace) {

@@ -26,8 +26,9 @@ void createFolder(const fs::path& dir, const std::string& name_for_errors) {
 
 AtomicFile::AtomicFile(fs::path target) : target_(std::move(target)) {
   createFolder(target_.parent_path(), target_.string());
-  temp_ = target_.parent_path() /
-          ("." + target_.filename().string() + ".tmp-" + std::to_string(::getpid()));
+  std::string name = ".";  // built by append: GCC 12 warns (-Wrestrict) on the + chain
+  name.append(target_.filename().string()).append(".tmp-").append(std::to_string(::getpid()));
+  temp_ = target_.parent_path() / name;
   file_ = std::fopen(temp_.c_str(), "wb");
   if (!file_) {
     throw DataError(target_.string(), 0, "cannot open for writing: " + systemMessage(errno));

@@ -2,11 +2,14 @@
 // ../shared/data/README.md). Files are read whole and parsed with std::from_chars: the
 // 62k-line odometry files of dataset 6 take a few milliseconds.
 #include <seif/core/errors.hpp>
+#include <seif/io/atomic_file.hpp>
 #include <seif/io/mrclam.hpp>
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
+#include <cassert>
 #include <charconv>
 #include <climits>
 #include <cmath>
@@ -15,12 +18,12 @@
 #include <initializer_list>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
 #include <system_error>
 #include <utility>
-#include <vector>
 
 namespace seif {
 namespace {
@@ -46,13 +49,18 @@ std::string quoted(std::string_view field) {
   return "'" + std::string(field) + "'";
 }
 
-std::string readWholeFile(const fs::path& path) {
+/// The text of `path`; nullopt when it does not exist (a dangling link included). Throws
+/// DataError naming the file when it exists but cannot be read.
+std::optional<std::string> readFileIfExists(const fs::path& path) {
   const std::string name = path.string();
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) {
-    if (!fs::exists(path, ec)) throw DataError(name, 0, "missing required file");
-    throw DataError(name, 0, "not a regular file");
+  const fs::file_status status = fs::status(path, ec);
+  if (status.type() == fs::file_type::not_found) return std::nullopt;
+  if (ec == std::errc::too_many_symbolic_link_levels) {
+    throw DataError(name, 0, "symbolic-link loop: " + ec.message());
   }
+  if (ec) throw DataError(name, 0, "cannot access file: " + ec.message());
+  if (!fs::is_regular_file(status)) throw DataError(name, 0, "not a regular file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw DataError(name, 0, "cannot open file for reading");
   std::string text;
@@ -66,22 +74,31 @@ std::string readWholeFile(const fs::path& path) {
   return text;
 }
 
+/// File `name` of `folder` as named in messages.
+std::string fileName(std::string_view folder, std::string_view name) {
+  return (fs::path(folder) / name).string();
+}
+
 /// One whitespace-separated table: iterates over the data lines of a file, checks the field
 /// count, and parses fields strictly. Every failure is a DataError naming file and line.
+/// The table refers to `folder`, `name` and `text`, which must outlive it.
 class Table {
  public:
-  Table(const fs::path& path, std::initializer_list<const char*> columns)
-      : file_(path.string()), text_(readWholeFile(path)), columns_(columns) {
-    fields_.resize(columns_.size());
+  Table(std::string_view folder, std::string_view name, std::string_view text,
+        std::initializer_list<const char*> columns)
+      : folder_(folder), name_(name), text_(text), count_(columns.size()) {
+    assert(count_ <= kMaxColumns);
+    std::copy(columns.begin(), columns.end(), columns_.begin());
   }
 
-  const std::string& file() const { return file_; }
   long line() const { return line_; }
 
   /// An upper bound of the number of data lines (for reserve()).
   std::size_t lineBound() const {
     std::size_t n = 1;
-    for (const char c : text_) n += (c == '\n') ? 1 : 0;
+    for (std::size_t i = text_.find('\n'); i != std::string_view::npos; i = text_.find('\n', i + 1)) {
+      ++n;
+    }
     return n;
   }
 
@@ -89,7 +106,7 @@ class Table {
   bool next() {
     while (pos_ < text_.size()) {
       std::size_t eol = text_.find('\n', pos_);
-      if (eol == std::string::npos) eol = text_.size();
+      if (eol == std::string_view::npos) eol = text_.size();
       const std::string_view line(text_.data() + pos_, eol - pos_);
       pos_ = eol + 1;
       ++line_;
@@ -124,7 +141,9 @@ class Table {
     return value;
   }
 
-  [[noreturn]] void fail(const std::string& what) const { throw DataError(file_, line_, what); }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw DataError(fileName(folder_, name_), line_, what);
+  }
 
   /// "column 3 (range)"
   std::string columnName(std::size_t col) const {
@@ -132,7 +151,12 @@ class Table {
   }
 
  private:
-  static bool isBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+  static bool isBlank(char c) {
+    switch (c) {
+      case ' ': case '\t': case '\r': case '\v': case '\f': return true;
+      default: return false;
+    }
+  }
 
   /// Splits a line into fields_; false for blank and comment lines.
   bool split(std::string_view line) {
@@ -144,26 +168,29 @@ class Table {
       if (n == 0 && line[i] == '#') return false;
       const std::size_t start = i;
       while (i < line.size() && !isBlank(line[i])) ++i;
-      if (n < fields_.size()) fields_[n] = line.substr(start, i - start);
+      if (n < count_) fields_[n] = line.substr(start, i - start);
       ++n;
     }
     if (n == 0) return false;
-    if (n != fields_.size()) {
+    if (n != count_) {
       std::string names;
-      for (const char* c : columns_) {
+      for (std::size_t c = 0; c < count_; ++c) {
         if (!names.empty()) names += ' ';
-        names += c;
+        names += columns_[c];
       }
-      fail("expected " + std::to_string(fields_.size()) + " fields (" + names + "), found " +
+      fail("expected " + std::to_string(count_) + " fields (" + names + "), found " +
            std::to_string(n));
     }
     return true;
   }
 
-  std::string file_;
-  std::string text_;
-  std::vector<const char*> columns_;
-  std::vector<std::string_view> fields_;
+  std::string_view folder_;
+  std::string_view name_;
+  std::string_view text_;
+  static constexpr std::size_t kMaxColumns = 5;
+  std::size_t count_;  // columns
+  std::array<const char*, kMaxColumns> columns_{};
+  std::array<std::string_view, kMaxColumns> fields_{};
   std::size_t pos_ = 0;
   long line_ = 0;
 };
@@ -189,50 +216,187 @@ std::string robotFile(int robot, const char* kind) {
   return "Robot" + std::to_string(robot) + "_" + kind + ".dat";
 }
 
-NoiseModel readMetaNoise(const fs::path& path, bool& has_noise) {
-  const std::string name = path.string();
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(readWholeFile(path));
-  } catch (const nlohmann::json::parse_error& e) {
-    throw DataError(name, 0, std::string("malformed JSON: ") + e.what());
+/// A JSON value as shown in a message: a scalar as written (shortened), a container by its
+/// kind (dump() recurses once per level: a deeply nested value would overflow the stack).
+std::string shown(const nlohmann::json& value) {
+  if (value.is_object()) return "an object";
+  if (value.is_array()) return "an array";
+  constexpr std::size_t kMax = 40;
+  const std::string text = value.dump();
+  return text.size() > kMax ? text.substr(0, kMax) + "..." : text;
+}
+
+/// The one rule for a meta.json sigma, shared by reader and writer.
+void checkSigma(const std::string& file, const char* key, double sigma) {
+  if (!std::isfinite(sigma) || !(sigma > 0.0)) {
+    throw DataError(file, 0, std::string("\"noise.") + key + "\" must be finite and > 0, found " +
+                                 formatDouble(sigma));
   }
+}
+
+struct SigmaKey {
+  const char* key;
+  double NoiseModel::*member;
+};
+constexpr SigmaKey kSigmaKeys[] = {{"sigma_v", &NoiseModel::sigma_v},
+                                   {"sigma_w", &NoiseModel::sigma_w},
+                                   {"sigma_range", &NoiseModel::sigma_range},
+                                   {"sigma_bearing", &NoiseModel::sigma_bearing}};
+
+std::optional<NoiseModel> parseMetaJson(std::string_view text, const std::string& name) {
+  const nlohmann::json j = nlohmann::json::parse(text);
   if (!j.is_object()) throw DataError(name, 0, "expected a JSON object");
   if (const auto it = j.find("format"); it != j.end()) {
     if (!it->is_string() || it->get<std::string>() != "seif-mrclam") {
-      throw DataError(name, 0, "\"format\" must be \"seif-mrclam\", found " + it->dump());
+      throw DataError(name, 0, "\"format\" must be \"seif-mrclam\", found " + shown(*it));
     }
   }
   if (const auto it = j.find("robot"); it != j.end()) {
     const bool ok = it->is_number_integer() && it->get<long long>() >= kFirstRobot &&
                       it->get<long long>() <= kLastRobot;
     if (!ok) {
-      throw DataError(name, 0, "\"robot\" must be an integer in 1..5, found " + it->dump());
+      throw DataError(name, 0, "\"robot\" must be an integer in 1..5, found " + shown(*it));
     }
   }
-  NoiseModel noise;
-  has_noise = false;
   const auto it = j.find("noise");
-  if (it == j.end()) return noise;
+  if (it == j.end()) return std::nullopt;
   if (!it->is_object()) throw DataError(name, 0, "\"noise\" must be an object");
-  const std::pair<const char*, double*> sigmas[] = {{"sigma_v", &noise.sigma_v},
-                                                    {"sigma_w", &noise.sigma_w},
-                                                    {"sigma_range", &noise.sigma_range},
-                                                    {"sigma_bearing", &noise.sigma_bearing}};
-  for (const auto& [key, out] : sigmas) {
+  NoiseModel noise;
+  for (const auto& [key, member] : kSigmaKeys) {
     const auto s = it->find(key);
     if (s == it->end()) throw DataError(name, 0, std::string("\"noise\" lacks \"") + key + "\"");
     if (!s->is_number()) {
-      throw DataError(name, 0, std::string("\"noise.") + key + "\" must be a number, found " + s->dump());
+      throw DataError(name, 0,
+                      std::string("\"noise.") + key + "\" must be a number, found " + shown(*s));
     }
-    *out = s->get<double>();
-    if (!std::isfinite(*out) || *out < 0.0) {
-      throw DataError(name, 0, std::string("\"noise.") + key + "\" must be finite and >= 0, found " +
-                                   s->dump());
+    noise.*member = s->get<double>();
+    checkSigma(name, key, noise.*member);
+  }
+  return noise;
+}
+
+/// The reader proper. `read(name)` returns the text of file `name` of the folder, nullopt
+/// when it is absent; the view it returns stays valid until its next call.
+template <class Read>
+RobotLog parseMrclam(const std::string& folder, int robot, Read&& read) {
+  if (!isRobot(robot)) {
+    throw DataError(folder, 0, "robot number " + std::to_string(robot) + " is outside 1..5");
+  }
+  const auto required = [&](const std::string& name) {
+    const std::optional<std::string_view> text = read(name);
+    if (!text) throw DataError(fileName(folder, name), 0, "missing required file");
+    return *text;
+  };
+  RobotLog log;
+  log.source = folder;
+  log.robot = robot;
+
+  // Barcodes.dat: subject barcode.
+  struct BarcodeRow {
+    int subject;
+    long line;
+  };
+  std::map<int, BarcodeRow> barcodes;
+  {
+    Table t(folder, "Barcodes.dat", required("Barcodes.dat"), {"subject", "barcode"});
+    std::map<int, long> subject_line;
+    while (t.next()) {
+      const int subject = t.integer(0);
+      const int barcode = t.integer(1);
+      if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
+      if (barcode < 0) t.fail("barcode " + std::to_string(barcode) + " must not be negative");
+      if (const auto [it, fresh] = barcodes.emplace(barcode, BarcodeRow{subject, t.line()}); !fresh) {
+        t.fail("barcode " + std::to_string(barcode) + " listed twice (first on line " +
+               std::to_string(it->second.line) + ")");
+      }
+      if (const auto [it, fresh] = subject_line.emplace(subject, t.line()); !fresh) {
+        t.fail("subject " + std::to_string(subject) + " listed twice (first on line " +
+               std::to_string(it->second) + ")");
+      }
     }
   }
-  has_noise = true;
-  return noise;
+
+  // Landmark_Groundtruth.dat: subject x y x_sd y_sd.
+  {
+    Table t(folder, "Landmark_Groundtruth.dat", required("Landmark_Groundtruth.dat"),
+            {"subject", "x", "y", "x_sd", "y_sd"});
+    while (t.next()) {
+      const int subject = t.integer(0);
+      const double x = t.real(1);
+      const double y = t.real(2);
+      const double x_sd = t.real(3);
+      const double y_sd = t.real(4);
+      if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
+      if (isRobot(subject)) t.fail("subject " + std::to_string(subject) + " is a robot (1-5), not a landmark");
+      if (x_sd < 0.0 || y_sd < 0.0) t.fail("negative standard deviation");
+      if (!log.landmarks.emplace(subject, Vec2(x, y)).second) {
+        t.fail("landmark " + std::to_string(subject) + " listed twice");
+      }
+    }
+  }
+
+  // RobotN_Odometry.dat: time v w.
+  {
+    const std::string name = robotFile(robot, "Odometry");
+    Table t(folder, name, required(name), {"time", "v", "w"});
+    log.odometry.reserve(t.lineBound());
+    TimeOrder order;
+    while (t.next()) {
+      OdometryRecord r;
+      r.time = t.real(0);
+      r.v = t.real(1);
+      r.w = t.real(2);
+      order.check(t, r.time);
+      log.odometry.push_back(r);
+    }
+  }
+
+  // RobotN_Measurement.dat: time barcode range bearing.
+  {
+    const std::string name = robotFile(robot, "Measurement");
+    Table t(folder, name, required(name), {"time", "barcode", "range", "bearing"});
+    log.measurements.reserve(t.lineBound());
+    TimeOrder order;
+    while (t.next()) {
+      MeasurementRecord m;
+      m.time = t.real(0);
+      const int barcode = t.integer(1);
+      m.range = t.real(2);
+      m.bearing = t.real(3);
+      order.check(t, m.time);
+      if (!(m.range > 0.0)) t.fail("range " + formatDouble(m.range) + " must be positive");
+      const auto it = barcodes.find(barcode);
+      if (it == barcodes.end()) {
+        ++log.dropped.unknown_barcodes;
+      } else if (isRobot(it->second.subject)) {
+        ++log.dropped.robot_measurements;
+      } else {
+        m.subject = it->second.subject;
+        log.measurements.push_back(m);
+      }
+    }
+  }
+
+  // RobotN_Groundtruth.dat (optional): time x y theta.
+  const std::string gt_name = robotFile(robot, "Groundtruth");
+  if (const std::optional<std::string_view> text = read(gt_name)) {
+    Table t(folder, gt_name, *text, {"time", "x", "y", "theta"});
+    log.groundtruth.reserve(t.lineBound());
+    TimeOrder order;
+    while (t.next()) {
+      TimedPose p;
+      p.time = t.real(0);
+      p.pose = Pose2(t.real(1), t.real(2), t.real(3));
+      order.check(t, p.time);
+      log.groundtruth.push_back(p);
+    }
+  }
+
+  // meta.json (optional).
+  if (const std::optional<std::string_view> text = read("meta.json")) {
+    log.noise = readMetaJson(*text, fileName(folder, "meta.json"));
+  }
+  return log;
 }
 
 // --- writing -----------------------------------------------------------------------------
@@ -258,12 +422,7 @@ class Writer {
     text_ += '\n';
     first_ = true;
   }
-  void save(const fs::path& path) const {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(text_.data(), static_cast<std::streamsize>(text_.size()));
-    out.close();
-    if (!out) throw DataError(path.string(), 0, "cannot write file");
-  }
+  void save(const fs::path& path) const { writeFileAtomically(path, text_); }
 
  private:
   void sep() {
@@ -334,130 +493,42 @@ void validateForWriting(const fs::path& dir, const RobotLog& log, const std::set
     if (!g.pose.allFinite()) throw DataError(gt, line, "cannot write a non-finite pose");
   }
   if (log.noise) {
-    const NoiseModel& n = *log.noise;
-    for (const double s : {n.sigma_v, n.sigma_w, n.sigma_range, n.sigma_bearing}) {
-      if (!std::isfinite(s) || s < 0.0) {
-        throw DataError((dir / "meta.json").string(), 0, "cannot write a noise sigma that is not finite and >= 0");
-      }
+    for (const auto& [key, member] : kSigmaKeys) {
+      checkSigma((dir / "meta.json").string(), key, (*log.noise).*member);
     }
   }
 }
 
 }  // namespace
 
+std::optional<NoiseModel> readMetaJson(std::string_view text, const std::string& name_for_errors) {
+  try {
+    return parseMetaJson(text, name_for_errors);
+  } catch (const nlohmann::json::exception& e) {
+    // parse_error, and out_of_range for a number beyond double ("1e400"). The message quotes
+    // the token read last, which may be the whole file.
+    constexpr std::size_t kMax = 200;
+    const std::string what = e.what();
+    throw DataError(name_for_errors, 0,
+                    "malformed JSON: " + (what.size() > kMax ? what.substr(0, kMax) + "..." : what));
+  }
+}
+
+RobotLog readMrclam(const MrclamFiles& files, int robot) {
+  return parseMrclam(files.folder, robot, [&](const std::string& name) -> std::optional<std::string_view> {
+    const auto it = files.text.find(name);
+    if (it == files.text.end()) return std::nullopt;
+    return std::string_view(it->second);
+  });
+}
+
 RobotLog readMrclam(const std::filesystem::path& dir, int robot) {
-  if (!isRobot(robot)) {
-    throw DataError(dir.string(), 0, "robot number " + std::to_string(robot) + " is outside 1..5");
-  }
-  RobotLog log;
-  log.source = dir.string();
-  log.robot = robot;
-
-  // Barcodes.dat: subject barcode.
-  std::map<int, int> subject_of_barcode;
-  {
-    Table t(dir / "Barcodes.dat", {"subject", "barcode"});
-    std::map<int, long> barcode_line;
-    std::map<int, long> subject_line;
-    while (t.next()) {
-      const int subject = t.integer(0);
-      const int barcode = t.integer(1);
-      if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
-      if (barcode < 0) t.fail("barcode " + std::to_string(barcode) + " must not be negative");
-      if (const auto [it, fresh] = barcode_line.emplace(barcode, t.line()); !fresh) {
-        t.fail("barcode " + std::to_string(barcode) + " listed twice (first on line " +
-               std::to_string(it->second) + ")");
-      }
-      if (const auto [it, fresh] = subject_line.emplace(subject, t.line()); !fresh) {
-        t.fail("subject " + std::to_string(subject) + " listed twice (first on line " +
-               std::to_string(it->second) + ")");
-      }
-      subject_of_barcode.emplace(barcode, subject);
-    }
-  }
-
-  // Landmark_Groundtruth.dat: subject x y x_sd y_sd.
-  {
-    Table t(dir / "Landmark_Groundtruth.dat", {"subject", "x", "y", "x_sd", "y_sd"});
-    while (t.next()) {
-      const int subject = t.integer(0);
-      const double x = t.real(1);
-      const double y = t.real(2);
-      const double x_sd = t.real(3);
-      const double y_sd = t.real(4);
-      if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
-      if (isRobot(subject)) t.fail("subject " + std::to_string(subject) + " is a robot (1-5), not a landmark");
-      if (x_sd < 0.0 || y_sd < 0.0) t.fail("negative standard deviation");
-      if (!log.landmarks.emplace(subject, Vec2(x, y)).second) {
-        t.fail("landmark " + std::to_string(subject) + " listed twice");
-      }
-    }
-  }
-
-  // RobotN_Odometry.dat: time v w.
-  {
-    Table t(dir / robotFile(robot, "Odometry"), {"time", "v", "w"});
-    log.odometry.reserve(t.lineBound());
-    TimeOrder order;
-    while (t.next()) {
-      OdometryRecord r;
-      r.time = t.real(0);
-      r.v = t.real(1);
-      r.w = t.real(2);
-      order.check(t, r.time);
-      log.odometry.push_back(r);
-    }
-  }
-
-  // RobotN_Measurement.dat: time barcode range bearing.
-  {
-    Table t(dir / robotFile(robot, "Measurement"), {"time", "barcode", "range", "bearing"});
-    log.measurements.reserve(t.lineBound());
-    TimeOrder order;
-    while (t.next()) {
-      MeasurementRecord m;
-      m.time = t.real(0);
-      const int barcode = t.integer(1);
-      m.range = t.real(2);
-      m.bearing = t.real(3);
-      order.check(t, m.time);
-      if (!(m.range > 0.0)) t.fail("range " + formatDouble(m.range) + " must be positive");
-      const auto it = subject_of_barcode.find(barcode);
-      if (it == subject_of_barcode.end()) {
-        ++log.dropped.unknown_barcodes;
-      } else if (isRobot(it->second)) {
-        ++log.dropped.robot_measurements;
-      } else {
-        m.subject = it->second;
-        log.measurements.push_back(m);
-      }
-    }
-  }
-
-  // RobotN_Groundtruth.dat (optional): time x y theta.
-  const fs::path gt_path = dir / robotFile(robot, "Groundtruth");
-  std::error_code ec;
-  if (fs::exists(gt_path, ec)) {
-    Table t(gt_path, {"time", "x", "y", "theta"});
-    log.groundtruth.reserve(t.lineBound());
-    TimeOrder order;
-    while (t.next()) {
-      TimedPose p;
-      p.time = t.real(0);
-      p.pose = Pose2(t.real(1), t.real(2), t.real(3));
-      order.check(t, p.time);
-      log.groundtruth.push_back(p);
-    }
-  }
-
-  // meta.json (optional).
-  const fs::path meta = dir / "meta.json";
-  if (fs::exists(meta, ec)) {
-    bool has_noise = false;
-    const NoiseModel noise = readMetaNoise(meta, has_noise);
-    if (has_noise) log.noise = noise;
-  }
-  return log;
+  std::optional<std::string> text;  // the file being parsed; one at a time
+  return parseMrclam(dir.string(), robot, [&](const std::string& name) -> std::optional<std::string_view> {
+    text = readFileIfExists(dir / name);
+    if (!text) return std::nullopt;
+    return std::string_view(*text);
+  });
 }
 
 void writeMrclam(const std::filesystem::path& dir, const RobotLog& log) {

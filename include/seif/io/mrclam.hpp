@@ -18,12 +18,21 @@
 //
 // meta.json: {"format": "seif-mrclam", "robot": N, "noise": {"sigma_v": .., "sigma_w": ..,
 // "sigma_range": .., "sigma_bearing": ..}}. Every key is optional; when "noise" is present
-// all four sigmas must be finite numbers >= 0. "robot", when present, must be 1..5 (it is
-// not required to match the robot being read: the noise of a simulated folder is shared).
-// A malformed meta.json is a DataError naming the file (no line number).
+// all four sigmas must be finite numbers > 0 (the writer refuses to write others). "robot",
+// when present, must be 1..5 (it is not required to match the robot being read: the noise
+// of a simulated folder is shared). A malformed meta.json (a number beyond double range
+// included) is a DataError naming the file (no line number).
+//
+// Files: a missing optional file (or a dangling symbolic link) is skipped; a symbolic-link
+// loop, a folder or an unreadable file is a DataError naming the file.
 #include <seif/io/dataset.hpp>
 
 #include <filesystem>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
 
 namespace seif {
 
@@ -34,9 +43,25 @@ namespace seif {
 /// robot; RobotLog::landmarks holds the positions of Landmark_Groundtruth.dat (x_sd and
 /// y_sd are checked, then discarded). RobotLog::source is `dir`. Measurements before the
 /// first odometry row are kept here; buildDataset() drops and counts them.
-/// Throws DataError: robot outside 1..5 (naming `dir`), a missing required file (naming the
-/// file, no line), or any malformed line (naming file and line).
+/// Throws DataError: robot outside 1..5 (naming `dir`), a missing or unreadable required
+/// file (naming the file, no line), or any malformed line (naming file and line).
 RobotLog readMrclam(const std::filesystem::path& dir, int robot = 1);
+
+/// The files of an MRCLAM folder held in memory.
+struct MrclamFiles {
+  std::string folder;  ///< names the files in messages, as folder/NAME, and RobotLog::source
+  /// File name ("Barcodes.dat", "Robot1_Odometry.dat", "meta.json", ...) -> content; a name
+  /// that is absent is a missing file.
+  std::map<std::string, std::string, std::less<>> text;
+};
+
+/// readMrclam(dir, robot) on files held in memory, with the same checks and messages
+/// (files named as in the folder `files.folder`).
+RobotLog readMrclam(const MrclamFiles& files, int robot = 1);
+
+/// Parses the content of a meta.json (rules above): its noise, nullopt when it has none.
+/// Throws DataError naming `name_for_errors`.
+std::optional<NoiseModel> readMetaJson(std::string_view text, const std::string& name_for_errors);
 
 /// Writes `log` as robot `log.robot` of an MRCLAM folder (creating it), with barcodes
 /// assigned to the landmark subjects, and meta.json when log.noise is set.
@@ -50,8 +75,9 @@ RobotLog readMrclam(const std::filesystem::path& dir, int robot = 1);
 /// is left alone when log.noise is empty.
 /// Throws DataError, before writing anything, when the log could not be read back: robot
 /// outside 1..5, a landmark subject <= 5, a non-finite value, range <= 0, time going
-/// backwards (naming the file and the line the row would have); or when a file cannot be
-/// written.
+/// backwards (naming the file and the line the row would have), a noise sigma that is not
+/// finite and > 0 (naming meta.json and the key); or when a file cannot be written. Each file
+/// is written atomically (writeFileAtomically): complete or, when writing fails, the old one.
 void writeMrclam(const std::filesystem::path& dir, const RobotLog& log);
 
 }  // namespace seif
