@@ -1,13 +1,28 @@
 # Installs the already-built seif into a scratch prefix, then configures, builds and
-# runs tests/package/consumer against it with find_package(seif).
+# runs tests/package/consumer against it with find_package(seif). The consumer gets the
+# compiler, build type and flags of the tree that built seif (CONSUMER_* from
+# tests/CMakeLists.txt): an instrumented (SEIF_SANITIZE) libseif.a links only with them.
 file(REMOVE_RECURSE ${WORK_DIR})
 execute_process(COMMAND ${CMAKE_COMMAND} --install ${SEIF_BINARY_DIR} --prefix ${WORK_DIR}/prefix
   RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "cmake --install failed")
 endif()
+set(consumer_args -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix)
+if(CONSUMER_CXX_COMPILER)
+  list(APPEND consumer_args -DCMAKE_CXX_COMPILER=${CONSUMER_CXX_COMPILER})
+endif()
+if(CONSUMER_BUILD_TYPE)
+  list(APPEND consumer_args -DCMAKE_BUILD_TYPE=${CONSUMER_BUILD_TYPE})
+endif()
+if(CONSUMER_CXX_FLAGS)
+  list(APPEND consumer_args "-DCMAKE_CXX_FLAGS=${CONSUMER_CXX_FLAGS}")
+endif()
+if(CONSUMER_EXE_LINKER_FLAGS)
+  list(APPEND consumer_args "-DCMAKE_EXE_LINKER_FLAGS=${CONSUMER_EXE_LINKER_FLAGS}")
+endif()
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SEIF_SOURCE_DIR}/tests/package/consumer
-  -B ${WORK_DIR}/build -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix RESULT_VARIABLE rc)
+  -B ${WORK_DIR}/build ${consumer_args} RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "configuring the consumer against the installed package failed")
 endif()
