@@ -122,3 +122,28 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateSteps) {
   EXPECT_GT(checked, 1000u);
   EXPECT_EQ(allocating, 0u) << "of " << checked << " steady-state steps";
 }
+
+// Every marginal of a state comes from one factorisation: the first read factors H and
+// computes the selected inverse's columns it needs, later reads compute the rest of their
+// paths, and no read builds an N-row matrix (the landed getter solved with a dense
+// (3+2N) x 2 right-hand side per landmark: one allocation each, O(N^2) for a map).
+TEST(SeifAllocation, AllMarginalsOfAStateCostOneFactorisation) {
+  const seif::test::Scenario s = seif::test::makeScenario(7, 600, 200, 4.0);
+  seif::FilterConfig config;
+  config.noise = s.noise;
+  seif::SeifSlam seif(s.start, config);
+  for (const seif::Step& step : s.steps) seif.step(step.u, step.observations);
+  ASSERT_GT(seif.landmarkIds().size(), 300u);
+  double trace = 0.0;
+  std::size_t count = g_allocations.load();
+  trace += seif.poseCovariance().trace();
+  for (int id : seif.landmarkIds()) trace += seif.landmarkCovariance(id).trace();
+  const std::size_t first_pass = g_allocations.load() - count;
+  count = g_allocations.load();
+  for (int id : seif.landmarkIds()) trace += seif.landmarkCovariance(id).trace();
+  const std::size_t second_pass = g_allocations.load() - count;
+  EXPECT_GT(trace, 0.0);
+  // A few dozen in the factorisation (triplets, ordering, symbolic analysis), whatever N.
+  EXPECT_LT(first_pass, 100u) << "for " << seif.landmarkIds().size() << " landmarks";
+  EXPECT_EQ(second_pass, 0u);
+}

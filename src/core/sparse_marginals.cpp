@@ -52,6 +52,9 @@ void SparseMarginals::computeColumnsFor(int column) const {
   if (Z.empty()) {
     Z.assign(static_cast<std::size_t>(L.nonZeros()), 0.0);
     done.assign(static_cast<std::size_t>(L.cols()), 0);
+    int widest = 0;
+    for (Eigen::Index j = 0; j < L.cols(); ++j) widest = std::max(widest, outer[j + 1] - outer[j]);
+    impl_->acc.reserve(static_cast<std::size_t>(widest));  // assign() below never reallocates
   }
   std::vector<int>& path = impl_->path;
   path.clear();
