@@ -145,7 +145,8 @@ void SeifFlags::add(CLI::App& cmd) {
       ->transform(integerIn(1, kMaxLocalLandmarks - 1))
       ->capture_default_str();
   cmd.add_option("--relax", relax,
-                 "SEIF: K, landmarks relaxed per step besides the robot and the active ones")
+                 "SEIF: K, landmarks relaxed per step besides the robot and the active ones "
+                 "(at most every landmark once: K is capped at the map size)")
       ->transform(integerIn(0, INT_MAX))
       ->capture_default_str();
   cmd.add_option("--mean", mean,
