@@ -50,8 +50,8 @@ NoiseModel paperNoise() { return presetConfig(WorldPreset::Paper).noise; }
 std::vector<Observation> predicted(const SlamFilter& f, const std::vector<int>& ids) {
   std::vector<Observation> z;
   for (int id : ids) {
-    const Vec2 rb = RangeBearingModel::predict(f.pose(), f.landmark(id));
-    z.push_back({id, rb.x(), rb.y()});
+    const Vec2 rb = RangeBearingModel(1.0, 1.0).predict(f.pose(), f.landmark(id));
+    z.push_back({id, rb, std::nullopt});
   }
   return z;
 }
@@ -79,7 +79,7 @@ Prepared prepareDense(const std::string& name, int n) {
   std::vector<Observation> all;
   std::vector<int> ids;
   for (int i = 0; i < n; ++i) {
-    all.push_back({100 + i, radius(rng), angle(rng)});
+    all.push_back({100 + i, Vec2(radius(rng), angle(rng)), std::nullopt});
     ids.push_back(100 + i);
   }
   p.filter->update(all);

@@ -22,7 +22,7 @@ static void BM_RangeBearingWithJacobians(benchmark::State& state) {
   seif::Mat23 J_x;
   seif::Mat2 J_y;
   for (auto _ : state) {
-    benchmark::DoNotOptimize(seif::RangeBearingModel::predict(x, y, &J_x, &J_y));
+    benchmark::DoNotOptimize(seif::RangeBearingModel(1.0, 1.0).predict(x, y, &J_x, &J_y));
     benchmark::ClobberMemory();
   }
 }

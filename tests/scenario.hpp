@@ -2,7 +2,7 @@
 // A small self-contained SLAM scenario for filter tests: landmarks scattered around a
 // circular path, range-bearing observations with noise, all from one seed.
 #include <seif/core/angles.hpp>
-#include <seif/io/dataset.hpp>
+#include <seif/core/dataset.hpp>
 #include <seif/models/range_bearing.hpp>
 #include <seif/models/velocity_motion.hpp>
 
@@ -42,9 +42,11 @@ inline Scenario makeScenario(std::uint64_t seed, int landmarks, int steps,
     for (int i = 0; i < landmarks; ++i) {
       const double d = (s.landmarks[static_cast<std::size_t>(i)] - truth.head<2>()).norm();
       if (d > sensor_range || d < 1e-3) continue;
-      const Vec2 z = RangeBearingModel::predict(truth, s.landmarks[static_cast<std::size_t>(i)]);
-      step.observations.push_back({100 + i, z.x() + s.noise.sigma_range * n01(rng),
-                                   wrapAngle(z.y() + s.noise.sigma_bearing * n01(rng))});
+      const Vec2 z = RangeBearingModel(1.0, 1.0).predict(truth, s.landmarks[static_cast<std::size_t>(i)]);
+      step.observations.push_back({100 + i,
+                                   Vec2(z.x() + s.noise.sigma_range * n01(rng),
+                                        wrapAngle(z.y() + s.noise.sigma_bearing * n01(rng))),
+                                   std::nullopt});
     }
     s.steps.push_back(std::move(step));
   }

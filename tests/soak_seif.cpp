@@ -58,9 +58,11 @@ TEST(Soak, AMillionSeifStepsOnAFixedMap) {
     z.clear();
     for (std::size_t i = 0; i < landmarks.size(); ++i) {
       if ((landmarks[i] - truth.head<2>()).norm() > kSensorRange) continue;
-      const Vec2 h = RangeBearingModel::predict(truth, landmarks[i]);
-      z.push_back({static_cast<int>(i), h.x() + config.noise.sigma_range * n01(rng),
-                   wrapAngle(h.y() + config.noise.sigma_bearing * n01(rng))});
+      const Vec2 h = RangeBearingModel(1.0, 1.0).predict(truth, landmarks[i]);
+      z.push_back({static_cast<int>(i),
+                   Vec2(h.x() + config.noise.sigma_range * n01(rng),
+                        wrapAngle(h.y() + config.noise.sigma_bearing * n01(rng))),
+                   std::nullopt});
     }
     seif.step(odometry, z);
     const Pose2 x = seif.pose();

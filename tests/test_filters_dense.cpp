@@ -113,10 +113,10 @@ TEST(DenseFilters, BearingInnovationIsWrappedForALandmarkBehind) {
     std::unique_ptr<SlamFilter> f;
     if (which == 0) f = std::make_unique<EkfSlam>(Pose2::Zero(), config);
     else f = std::make_unique<EifSlam>(Pose2::Zero(), config);
-    const Observation first[] = {{1, 2.0, kPi - 0.001}};
+    const Observation first[] = {{1, Vec2(2.0, kPi - 0.001), std::nullopt}};
     f->update(first);
     for (int i = 0; i < 20; ++i) {
-      const Observation z[] = {{1, 2.0, (i % 2 ? kPi - 0.01 : -kPi + 0.01)}};
+      const Observation z[] = {{1, Vec2(2.0, i % 2 ? kPi - 0.01 : -kPi + 0.01), std::nullopt}};
       f->update(z);
     }
     EXPECT_LT(std::abs(f->pose().z()), 0.02) << f->name();

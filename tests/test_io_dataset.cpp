@@ -2,7 +2,7 @@
 // interpolatePose of the ground truth.
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
-#include <seif/io/dataset.hpp>
+#include <seif/core/dataset.hpp>
 #include <seif/io/mrclam.hpp>
 
 #include <gtest/gtest.h>
@@ -31,15 +31,15 @@ RobotLog threeRows() {
 
 void expectControl(const Step& s, double time, double v, double w, double dt, std::size_t n_obs) {
   EXPECT_EQ(s.time, time);
-  EXPECT_EQ(s.u.v, v) << "step at " << time;
-  EXPECT_EQ(s.u.w, w) << "step at " << time;
-  EXPECT_EQ(s.u.dt, dt) << "step at " << time;
+  EXPECT_EQ(std::get<VelocityControl>(s.u).v, v) << "step at " << time;
+  EXPECT_EQ(std::get<VelocityControl>(s.u).w, w) << "step at " << time;
+  EXPECT_EQ(std::get<VelocityControl>(s.u).dt, dt) << "step at " << time;
   EXPECT_EQ(s.observations.size(), n_obs) << "step at " << time;
 }
 
 double sumDt(const Dataset& d) {
   double sum = 0.0;
-  for (const Step& s : d.steps) sum += s.u.dt;
+  for (const Step& s : d.steps) sum += std::get<VelocityControl>(s.u).dt;
   return sum;
 }
 
@@ -64,8 +64,8 @@ TEST(DatasetBuild, MeasurementSplitsThePrediction) {
   expectControl(d.steps[3], 12.0, 2.0, 0.2, 0.5, 0);
   EXPECT_EQ(sumDt(d), 12.0 - 10.0);
   // Per control row, the pieces add up to the row's interval.
-  EXPECT_EQ(d.steps[0].u.dt + d.steps[1].u.dt, 1.0);
-  EXPECT_EQ(d.steps[2].u.dt + d.steps[3].u.dt, 1.0);
+  EXPECT_EQ(std::get<VelocityControl>(d.steps[0].u).dt + std::get<VelocityControl>(d.steps[1].u).dt, 1.0);
+  EXPECT_EQ(std::get<VelocityControl>(d.steps[2].u).dt + std::get<VelocityControl>(d.steps[3].u).dt, 1.0);
 }
 
 TEST(DatasetBuild, MeasurementAtAControlStampComesBeforeTheNewControl) {
@@ -111,8 +111,7 @@ TEST(DatasetBuild, ObservationsAreGroupedByStamp) {
   EXPECT_EQ(s.observations[0].landmark, 9);  // landmark = subject, log order kept
   EXPECT_EQ(s.observations[1].landmark, 6);
   EXPECT_EQ(s.observations[2].landmark, 12);
-  EXPECT_EQ(s.observations[1].range, 2.5);
-  EXPECT_EQ(s.observations[1].bearing, -0.2);
+  EXPECT_EQ(s.observations[1].z, Vec2(2.5, -0.2));
   expectControl(d.steps[1], 10.75, 1.0, 0.1, 0.25, 1);
 }
 
@@ -199,14 +198,14 @@ TEST(DatasetBuild, RealDataInvariants) {
     double previous = d.start_time - 1.0;  // the first step may sit at start_time
     for (const Step& s : d.steps) {
       ASSERT_GT(s.time, previous) << "step times strictly increase";
-      ASSERT_GE(s.u.dt, 0.0);
-      ASSERT_TRUE(s.u.dt > 0.0 || !s.observations.empty());
+      ASSERT_GE(std::get<VelocityControl>(s.u).dt, 0.0);
+      ASSERT_TRUE(std::get<VelocityControl>(s.u).dt > 0.0 || !s.observations.empty());
       // The control is the last odometry row strictly before the step (or row 0).
       const auto row = std::lower_bound(log.odometry.begin(), log.odometry.end(), s.time,
                                         [](const OdometryRecord& r, double t) { return r.time < t; });
       const auto& ctl = row == log.odometry.begin() ? *row : *(row - 1);
-      ASSERT_EQ(s.u.v, ctl.v);
-      ASSERT_EQ(s.u.w, ctl.w);
+      ASSERT_EQ(std::get<VelocityControl>(s.u).v, ctl.v);
+      ASSERT_EQ(std::get<VelocityControl>(s.u).w, ctl.w);
       observations += s.observations.size();
       previous = s.time;
     }

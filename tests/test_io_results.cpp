@@ -33,10 +33,15 @@ std::size_t entries(const fs::path& dir) {
 /// An EKF whose covariance read-out fails at the third landmark, as an interrupted run would.
 class FailingFilter : public SlamFilter {
  public:
-  FailingFilter() : ekf_(Pose2::Zero(), FilterConfig{}) {}
+  FailingFilter() : SlamFilter(FilterConfig{}), ekf_(Pose2::Zero(), FilterConfig{}) {}
   std::string name() const override { return "failing"; }
-  void predict(const VelocityControl& u) override { ekf_.predict(u); }
-  void update(std::span<const Observation> z) override { ekf_.update(z); }
+  using SlamFilter::predict;
+  using SlamFilter::update;
+  void predict(const MotionIncrement& m) override { ekf_.predict(m); }
+  void update(std::span<const Observation> z, const MeasurementModel& sensor) override { ekf_.update(z, sensor); }
+  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor, const Mat2& R) const override {
+    return ekf_.predictMeasurement(id, sensor, R);
+  }
   Pose2 pose() const override { return ekf_.pose(); }
   Mat3 poseCovariance() const override { return ekf_.poseCovariance(); }
   const std::vector<int>& landmarkIds() const override { return ekf_.landmarkIds(); }
@@ -62,7 +67,7 @@ class FailingFilter : public SlamFilter {
 TEST(AtomicFile, AFailedWriteLeavesNeitherTheFileNorATemporary) {
   const fs::path dir = freshDir("fail");
   FailingFilter filter;
-  const Observation z[] = {{1, 1.0, 0.1}, {2, 1.5, -0.2}, {3, 2.0, 0.5}, {4, 2.5, 1.0}};
+  const Observation z[] = {{1, Vec2(1.0, 0.1), {}}, {2, Vec2(1.5, -0.2), {}}, {3, Vec2(2.0, 0.5), {}}, {4, Vec2(2.5, 1.0), {}}};
   filter.update(z);
   EXPECT_THROW(writeMapCsv(dir / "map.csv", filter), std::runtime_error);
   EXPECT_EQ(entries(dir), 0u);

@@ -56,9 +56,9 @@ void checkMotion(const Pose2& x, const VelocityControl& u) {
 void checkMeasurement(const Pose2& x, const Vec2& y) {
   Mat23 J_x;
   Mat2 J_y;
-  RangeBearingModel::predict(x, y, &J_x, &J_y);
-  auto fx = [&](const Vec3& xx) { return RangeBearingModel::predict(xx, y); };
-  auto fy = [&](const Vec2& yy) { return RangeBearingModel::predict(x, yy); };
+  RangeBearingModel(1.0, 1.0).predict(x, y, &J_x, &J_y);
+  auto fx = [&](const Vec3& xx) { return RangeBearingModel(1.0, 1.0).predict(xx, y); };
+  auto fy = [&](const Vec2& yy) { return RangeBearingModel(1.0, 1.0).predict(x, yy); };
   expectNear(J_x, numericJacobian<2, 3>(fx, x, 1), "J_z_x");
   expectNear(J_y, numericJacobian<2, 2>(fy, y, 1), "J_z_y");
 }
@@ -66,9 +66,9 @@ void checkMeasurement(const Pose2& x, const Vec2& y) {
 void checkInverse(const Pose2& x, const Vec2& z) {
   Mat23 J_x;
   Mat2 J_z;
-  RangeBearingModel::inverse(x, z, &J_x, &J_z);
-  auto fx = [&](const Vec3& xx) { return RangeBearingModel::inverse(xx, z); };
-  auto fz = [&](const Vec2& zz) { return RangeBearingModel::inverse(x, zz); };
+  RangeBearingModel(1.0, 1.0).inverse(x, z, &J_x, &J_z);
+  auto fx = [&](const Vec3& xx) { return RangeBearingModel(1.0, 1.0).inverse(xx, z); };
+  auto fz = [&](const Vec2& zz) { return RangeBearingModel(1.0, 1.0).inverse(x, zz); };
   expectNear(J_x, numericJacobian<2, 3>(fx, x), "J_y_x");
   expectNear(J_z, numericJacobian<2, 2>(fz, z), "J_y_z");
 }
@@ -146,8 +146,8 @@ TEST(RangeBearingModel, EdgeCasesAheadBehindAndAcrossTheSeam) {
     const Vec2 behind = x.head<2>() - 3.0 * Vec2(std::cos(heading), std::sin(heading));
     checkMeasurement(x, ahead);
     checkMeasurement(x, behind);  // bearing at +-pi: the wrapped difference is used
-    EXPECT_NEAR(RangeBearingModel::predict(x, ahead).y(), 0.0, 1e-9);
-    EXPECT_NEAR(std::abs(RangeBearingModel::predict(x, behind).y()), kPi, 1e-8);
+    EXPECT_NEAR(RangeBearingModel(1.0, 1.0).predict(x, ahead).y(), 0.0, 1e-9);
+    EXPECT_NEAR(std::abs(RangeBearingModel(1.0, 1.0).predict(x, behind).y()), kPi, 1e-8);
     checkInverse(x, Vec2(2.0, kPi - 1e-9));
     checkInverse(x, Vec2(2.0, 0.0));
   }
@@ -159,7 +159,7 @@ TEST(RangeBearingModel, InverseIsTheInverseOfPredict) {
   for (int i = 0; i < 200; ++i) {
     const Pose2 x(pos(rng), pos(rng), th(rng));
     const Vec2 z(r(rng), th(rng));
-    const Vec2 back = RangeBearingModel::predict(x, RangeBearingModel::inverse(x, z));
+    const Vec2 back = RangeBearingModel(1.0, 1.0).predict(x, RangeBearingModel(1.0, 1.0).inverse(x, z));
     EXPECT_NEAR(back.x(), z.x(), 1e-9);
     EXPECT_NEAR(wrapAngle(back.y() - z.y()), 0.0, 1e-9);
   }
@@ -167,14 +167,14 @@ TEST(RangeBearingModel, InverseIsTheInverseOfPredict) {
 
 TEST(RangeBearingModel, RangeToZeroThrows) {
   const Pose2 x(1.0, 1.0, 0.3);
-  EXPECT_THROW(RangeBearingModel::predict(x, Vec2(1.0, 1.0)), ModelError);
-  EXPECT_THROW(RangeBearingModel::inverse(x, Vec2(0.0, 0.1)), ModelError);
-  EXPECT_THROW(RangeBearingModel::inverse(x, Vec2(-1.0, 0.1)), ModelError);
-  EXPECT_THROW(RangeBearingModel::inverse(x, Vec2(std::nan(""), 0.1)), ModelError);
-  EXPECT_NO_THROW(RangeBearingModel::predict(x, Vec2(1.0 + 1e-6, 1.0)));
+  EXPECT_THROW(RangeBearingModel(1.0, 1.0).predict(x, Vec2(1.0, 1.0)), ModelError);
+  EXPECT_THROW(RangeBearingModel(1.0, 1.0).inverse(x, Vec2(0.0, 0.1)), ModelError);
+  EXPECT_THROW(RangeBearingModel(1.0, 1.0).inverse(x, Vec2(-1.0, 0.1)), ModelError);
+  EXPECT_THROW(RangeBearingModel(1.0, 1.0).inverse(x, Vec2(std::nan(""), 0.1)), ModelError);
+  EXPECT_NO_THROW(RangeBearingModel(1.0, 1.0).predict(x, Vec2(1.0 + 1e-6, 1.0)));
 }
 
 TEST(RangeBearingModel, BearingInnovationIsWrapped) {
-  const Vec2 nu = RangeBearingModel::innovation(Vec2(1.0, kPi - 0.01), Vec2(1.0, -kPi + 0.01));
+  const Vec2 nu = RangeBearingModel(1.0, 1.0).residual(Vec2(1.0, kPi - 0.01), Vec2(1.0, -kPi + 0.01));
   EXPECT_NEAR(nu.y(), -0.02, 1e-12);
 }

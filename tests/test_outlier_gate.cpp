@@ -5,6 +5,7 @@
 #include <seif/eval/run.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/filters/outlier_gate.hpp>
+#include <seif/models/range_bearing.hpp>
 #include <seif/sim/world.hpp>
 
 #include <gtest/gtest.h>
@@ -31,15 +32,16 @@ Dataset datasetOf(const test::Scenario& s) {
 
 TEST(OutlierGate, ThresholdIsInMeasurementStandardDeviations) {
   OutlierGate gate(1000.0);
+  const RangeBearingModel sensor(0.2, 0.03);
   const Pose2 x(0.0, 0.0, 0.0);
   const Vec2 y(1.0, 0.0);
   const Mat2 Z_inv = Vec2(1.0 / (0.2 * 0.2), 1.0 / (0.03 * 0.03)).asDiagonal();
-  EXPECT_FALSE(gate.rejects(x, y, {7, 1.0 + 199.0, 0.0}, Z_inv));  // 995 sigma
-  EXPECT_TRUE(gate.rejects(x, y, {7, 1.0 + 201.0, 0.0}, Z_inv));   // 1005 sigma
-  EXPECT_TRUE(gate.rejects(x, y, {7, std::numeric_limits<double>::quiet_NaN(), 0.0}, Z_inv));
+  EXPECT_FALSE(gate.rejects(sensor, x, y, {7, Vec2(1.0 + 199.0, 0.0), {}}, Z_inv));  // 995 sigma
+  EXPECT_TRUE(gate.rejects(sensor, x, y, {7, Vec2(1.0 + 201.0, 0.0), {}}, Z_inv));   // 1005 sigma
+  EXPECT_TRUE(gate.rejects(sensor, x, y, {7, Vec2(std::numeric_limits<double>::quiet_NaN(), 0.0), {}}, Z_inv));
   EXPECT_EQ(gate.rejected(), 2u);
   OutlierGate off(std::numeric_limits<double>::infinity());
-  EXPECT_FALSE(off.rejects(x, y, {7, 1e6, 0.0}, Z_inv));
+  EXPECT_FALSE(off.rejects(sensor, x, y, {7, Vec2(1e6, 0.0), {}}, Z_inv));
   EXPECT_THROW(OutlierGate(0.0), std::invalid_argument);
   EXPECT_THROW(OutlierGate(std::nan("")), std::invalid_argument);
 }
@@ -54,7 +56,7 @@ TEST(OutlierGate, ARejectedReadingLeavesTheFilterAsIfItWereNeverMade) {
   std::size_t k = 40;
   while (dirty.steps[k].observations.empty()) ++k;
   dirty.steps[k].observations.insert(dirty.steps[k].observations.begin() + 0,
-                                     Observation{dirty.steps[k].observations[0].landmark, 1e6, 0.3});
+                                     Observation{dirty.steps[k].observations[0].landmark, Vec2(1e6, 0.3), std::nullopt});
   for (const char* name : {"ekf", "eif", "seif"}) {
     SCOPED_TRACE(name);
     auto a = makeFilter(name, s.start, configFor(s));

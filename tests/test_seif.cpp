@@ -117,9 +117,9 @@ TEST(Seif, SparsificationInsideTheFilterKeepsTheMeanAndZeroesTheLinks) {
   SeifSlam seif(s.start, configFor(s), o);
   int sparsified = 0;
   for (const Step& step : s.steps) {
-    seif.motionUpdate(step.u);
+    seif.motionUpdate(seif.motionModel().linearize(seif.mean().head<3>(), step.u));
     seif.recoverMean();
-    seif.measurementUpdate(step.observations);
+    seif.measurementUpdate(step.observations, seif.sensorModel());
     seif.recoverExactMean();
     const Eigen::VectorXd before = seif.exactMean();
     const std::size_t active = seif.activeLandmarks().size();

@@ -370,11 +370,11 @@ TEST(SimNoise, MeasurementResidualsAreStandardNormal) {
   std::vector<double> range, bearing, product;
   for (const auto& m : log.measurements) {
     const seif::Pose2& x = log.groundtruth[stepOf(m.time, c.dt)].pose;
-    const Vec2 h = seif::RangeBearingModel::predict(x, log.landmarks.at(m.subject));
+    const Vec2 h = seif::RangeBearingModel(1.0, 1.0).predict(x, log.landmarks.at(m.subject));
     // Detections with a noisy range <= 0 are dropped; beyond 4 sigma that selection has
     // no measurable effect on the residuals.
     if (h.x() < 4.0 * c.noise.sigma_range) continue;
-    const Vec2 e = seif::RangeBearingModel::innovation(Vec2(m.range, m.bearing), h);
+    const Vec2 e = seif::RangeBearingModel(1.0, 1.0).residual(Vec2(m.range, m.bearing), h);
     range.push_back(e.x() / c.noise.sigma_range);
     bearing.push_back(e.y() / c.noise.sigma_bearing);
     product.push_back(range.back() * bearing.back());
@@ -428,7 +428,7 @@ TEST(SimNoise, WithoutNoiseTheLogIsExact) {
     EXPECT_NEAR(r.w, log.odometry[k].w, 1e-12);
   }
   for (const auto& m : log.measurements) {
-    const Vec2 h = seif::RangeBearingModel::predict(log.groundtruth[stepOf(m.time, c.dt)].pose,
+    const Vec2 h = seif::RangeBearingModel(1.0, 1.0).predict(log.groundtruth[stepOf(m.time, c.dt)].pose,
                                                     log.landmarks.at(m.subject));
     EXPECT_EQ(m.range, h.x());
     EXPECT_EQ(m.bearing, h.y());

@@ -53,7 +53,7 @@ void run(const RunArgs& args) {
     Progress progress("seif run " + args.filter);
     out = runFilter(*filter, data, std::ref(progress));
   }
-  const auto dr = deadReckoning(data, start);
+  const auto dr = deadReckoning(data, start, filter->motionModel());
   // ATE and map errors after the best rigid alignment (as the TUM benchmark and evo define
   // ATE), and in the ground truth's frame as they are (the filter starts at the true pose).
   const auto ate = ateRmse(out.trajectory, data.groundtruth, Alignment::Rigid);

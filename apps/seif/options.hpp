@@ -1,7 +1,7 @@
 #pragma once
 // Option groups shared by the commands that run filters.
 #include <seif/filters/factory.hpp>
-#include <seif/io/dataset.hpp>
+#include <seif/core/dataset.hpp>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>

@@ -54,13 +54,13 @@ RunOutput runFilter(SlamFilter& filter, const Dataset& data,
   return out;
 }
 
-std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start) {
+std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start, const MotionModel& motion) {
   std::vector<TimedPose> track;
   track.reserve(data.steps.size() + 1);
   Pose2 x = start;
   track.push_back({data.start_time, x});
   for (const Step& step : data.steps) {
-    x = VelocityMotionModel::apply(x, step.u);
+    x = motion.apply(x, step.u);
     track.push_back({step.time, x});
   }
   return track;

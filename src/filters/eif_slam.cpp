@@ -2,8 +2,6 @@
 #include <seif/core/errors.hpp>
 #include <seif/filters/eif_slam.hpp>
 #include <seif/filters/information_ops.hpp>
-#include <seif/models/range_bearing.hpp>
-#include <seif/models/velocity_motion.hpp>
 
 #include <Eigen/LU>
 #include <sstream>
@@ -11,7 +9,7 @@
 namespace seif {
 
 EifSlam::EifSlam(const Pose2& initial_pose, const FilterConfig& config)
-    : config_(config), gate_(config.outlier_gate), H_(Mat3::Zero()), b_(Vec3::Zero()), mu_(initial_pose) {
+    : SlamFilter(config), config_(config), gate_(config.outlier_gate), H_(Mat3::Zero()), b_(Vec3::Zero()), mu_(initial_pose) {
   H_.diagonal() = config.initial_pose_sigma.cwiseAbs2().cwiseInverse();
   b_ = H_ * mu_;
 }
@@ -58,13 +56,20 @@ std::size_t EifSlam::robotLinks() const {
   return n;
 }
 
-void EifSlam::predict(const VelocityControl& u) {
-  Mat3 J_x;
-  const Pose2 x = mu_.head<3>();
-  const Vec3 delta = VelocityMotionModel::delta(x, u, &J_x);
-  const Mat3 U = VelocityMotionModel::processNoise(x, u, config_.noise.sigma_v, config_.noise.sigma_w);
+PredictedMeasurement EifSlam::predictMeasurement(int id, const MeasurementModel& sensor,
+                                                const Mat2& R) const {
+  const int i = LandmarkIndex::stateIndex(index_.require(id, "eif"));
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(H_.rows(), 5);
+  E.topLeftCorner<3, 3>().setIdentity();
+  E.block<2, 2>(i, 3).setIdentity();
+  const Eigen::MatrixXd cols = factor().solve(E);  // Sigma's columns of the pose and landmark
+  return innovation(sensor, mu_.head<3>(), mu_.segment<2>(i), cols.topLeftCorner<3, 3>(),
+                    cols.block<3, 2>(0, 3), cols.block<2, 2>(i, 3), R);
+}
+
+void EifSlam::predict(const MotionIncrement& m) {
   Eigen::MatrixXd workspace(6, H_.cols());
-  informationMotionUpdate(H_, b_, mu_, delta, J_x, U, workspace);
+  informationMotionUpdate(H_, b_, mu_, m.delta, m.J_delta_x, m.U, workspace);
   llt_valid_ = false;
 }
 
@@ -72,14 +77,13 @@ void EifSlam::recoverMean() {
   mu_ = factor().solve(b_);
 }
 
-void EifSlam::update(std::span<const Observation> observations) {
+void EifSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
   if (observations.empty()) return;
-  const Mat2 Z_inv =
-      RangeBearingModel::noise(config_.noise.sigma_range, config_.noise.sigma_bearing).inverse();
   // New landmarks enter with no information and the inverse-model mean (algorithm.md).
   for (const Observation& z : observations) {
+    requireAssociated(z, "eif");
     if (index_.find(z.landmark) >= 0) continue;
-    const Vec2 y = RangeBearingModel::inverse(mu_.head<3>(), Vec2(z.range, z.bearing));
+    const Vec2 y = sensor.inverse(mu_.head<3>(), z.z);
     index_.add(z.landmark);
     const Eigen::Index n = H_.rows();
     H_.conservativeResize(n + 2, n + 2);
@@ -95,8 +99,9 @@ void EifSlam::update(std::span<const Observation> observations) {
   const Pose2 x = mu_.head<3>();
   for (const Observation& z : observations) {
     const Eigen::Index l = LandmarkIndex::stateIndex(index_.find(z.landmark));
-    if (gate_.rejects(x, mu_.segment<2>(l), z, Z_inv)) continue;
-    const MeasurementInformation info = measurementInformation(x, mu_.segment<2>(l), z, Z_inv);
+    const Mat2 Z_inv = sensor.noise(z).inverse();
+    if (gate_.rejects(sensor, x, mu_.segment<2>(l), z, Z_inv)) continue;
+    const MeasurementInformation info = measurementInformation(sensor, x, mu_.segment<2>(l), z, Z_inv);
     H_.topLeftCorner<3, 3>() += info.H.topLeftCorner<3, 3>();
     H_.block<3, 2>(0, l) += info.H.topRightCorner<3, 2>();
     H_.block<2, 3>(l, 0) += info.H.bottomLeftCorner<2, 3>();

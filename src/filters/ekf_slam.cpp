@@ -2,8 +2,6 @@
 #include <seif/core/errors.hpp>
 #include <seif/filters/ekf_slam.hpp>
 #include <seif/filters/information_ops.hpp>
-#include <seif/models/range_bearing.hpp>
-#include <seif/models/velocity_motion.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -12,7 +10,7 @@
 namespace seif {
 
 EkfSlam::EkfSlam(const Pose2& initial_pose, const FilterConfig& config)
-    : config_(config), gate_(config.outlier_gate), mu_(initial_pose), sigma_(Mat3::Zero()) {
+    : SlamFilter(config), config_(config), gate_(config.outlier_gate), mu_(initial_pose), sigma_(Mat3::Zero()) {
   sigma_.diagonal() = config.initial_pose_sigma.cwiseAbs2();
 }
 
@@ -36,12 +34,17 @@ Eigen::MatrixXd EkfSlam::information() const {
 
 FilterStats EkfSlam::stats() const { return denseLinkStats(information()); }
 
-void EkfSlam::predict(const VelocityControl& u) {
-  Mat3 J_x;
-  const Pose2 x = mu_.head<3>();
-  const Vec3 delta = VelocityMotionModel::delta(x, u, &J_x);
-  const Mat3 U = VelocityMotionModel::processNoise(x, u, config_.noise.sigma_v, config_.noise.sigma_w);
-  const Mat3 G = Mat3::Identity() + J_x;
+PredictedMeasurement EkfSlam::predictMeasurement(int id, const MeasurementModel& sensor,
+                                                const Mat2& R) const {
+  const int i = LandmarkIndex::stateIndex(index_.require(id, "ekf"));
+  return innovation(sensor, mu_.head<3>(), mu_.segment<2>(i), sigma_.topLeftCorner<3, 3>(),
+                    sigma_.block<3, 2>(0, i), sigma_.block<2, 2>(i, i), R);
+}
+
+void EkfSlam::predict(const MotionIncrement& m) {
+  const Mat3& U = m.U;
+  const Vec3& delta = m.delta;
+  const Mat3 G = Mat3::Identity() + m.J_delta_x;
   const Eigen::Index n = sigma_.rows();
   // Sigma <- G Sigma G^T + S_x U S_x^T, G = I except the robot block.
   sigma_.topRightCorner(3, n - 3) = (G * sigma_.topRightCorner(3, n - 3)).eval();
@@ -50,12 +53,12 @@ void EkfSlam::predict(const VelocityControl& u) {
   mu_.head<3>() += delta;
 }
 
-void EkfSlam::addLandmark(const Observation& z) {
+void EkfSlam::addLandmark(const Observation& z, const MeasurementModel& sensor) {
   // Inverse model y = g(x, z): Sigma_yy = Gx Sxx Gx^T + Gz Z Gz^T, Sigma_y* = Gx Sigma_x*.
   Mat23 G_x;
   Mat2 G_z;
-  const Vec2 y = RangeBearingModel::inverse(mu_.head<3>(), Vec2(z.range, z.bearing), &G_x, &G_z);
-  const Mat2 Z = RangeBearingModel::noise(config_.noise.sigma_range, config_.noise.sigma_bearing);
+  const Vec2 y = sensor.inverse(mu_.head<3>(), z.z, &G_x, &G_z);
+  const Mat2& Z = sensor.noise(z);
   const Eigen::Index n = sigma_.rows();
   index_.add(z.landmark);
   mu_.conservativeResize(n + 2);
@@ -68,19 +71,19 @@ void EkfSlam::addLandmark(const Observation& z) {
   sigma_.bottomRightCorner<2, 2>() = 0.5 * (S_yy + S_yy.transpose());
 }
 
-void EkfSlam::update(std::span<const Observation> observations) {
+void EkfSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
   // A landmark's first observation initialises it (and carries no other information);
   // all other observations form one joint update linearised at the prior mean.
   // Gross outliers (OutlierGate) are dropped first.
-  const Mat2 Z = RangeBearingModel::noise(config_.noise.sigma_range, config_.noise.sigma_bearing);
-  const Mat2 Z_inv = Z.inverse();
   std::vector<const Observation*> updates;
   updates.reserve(observations.size());
   for (const Observation& z : observations) {
+    requireAssociated(z, "ekf");
     const int slot = index_.find(z.landmark);
     if (slot < 0) {
-      addLandmark(z);
-    } else if (!gate_.rejects(mu_.head<3>(), mu_.segment<2>(LandmarkIndex::stateIndex(slot)), z, Z_inv)) {
+      addLandmark(z, sensor);
+    } else if (!gate_.rejects(sensor, mu_.head<3>(), mu_.segment<2>(LandmarkIndex::stateIndex(slot)), z,
+                              sensor.noise(z).inverse())) {
       updates.push_back(&z);
     }
   }
@@ -98,9 +101,8 @@ void EkfSlam::update(std::span<const Observation> observations) {
   for (std::size_t k = 0; k < updates.size(); ++k) {
     const Observation& z = *updates[k];
     li[k] = LandmarkIndex::stateIndex(index_.find(z.landmark));
-    const Vec2 zhat = RangeBearingModel::predict(x, mu_.segment<2>(li[k]), &Jx[k], &Jy[k]);
-    nu.segment<2>(2 * static_cast<Eigen::Index>(k)) =
-        RangeBearingModel::innovation(Vec2(z.range, z.bearing), zhat);
+    const Vec2 zhat = sensor.predict(x, mu_.segment<2>(li[k]), &Jx[k], &Jy[k]);
+    nu.segment<2>(2 * static_cast<Eigen::Index>(k)) = sensor.residual(z.z, zhat);
     PJt.middleCols<2>(2 * static_cast<Eigen::Index>(k)) =
         sigma_.leftCols<3>() * Jx[k].transpose() + sigma_.middleCols<2>(li[k]) * Jy[k].transpose();
   }
@@ -108,7 +110,7 @@ void EkfSlam::update(std::span<const Observation> observations) {
     // S = J Sigma J^T + R, row block k = Jx_k (Sigma J^T)_x + Jy_k (Sigma J^T)_l
     S.middleRows<2>(2 * static_cast<Eigen::Index>(k)) =
         Jx[k] * PJt.topRows<3>() + Jy[k] * PJt.middleRows<2>(li[k]);
-    S.block<2, 2>(2 * static_cast<Eigen::Index>(k), 2 * static_cast<Eigen::Index>(k)) += Z;
+    S.block<2, 2>(2 * static_cast<Eigen::Index>(k), 2 * static_cast<Eigen::Index>(k)) += sensor.noise(*updates[k]);
   }
   S = (0.5 * (S + S.transpose())).eval();
   Eigen::LLT<Eigen::MatrixXd> llt(S);

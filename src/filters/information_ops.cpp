@@ -1,7 +1,6 @@
 #include <seif/core/errors.hpp>
 #include <seif/filters/information_ops.hpp>
 #include <seif/filters/slam_filter.hpp>
-#include <seif/models/range_bearing.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -93,16 +92,16 @@ double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Vect
   return H.block(0, y0, 3, d).cwiseAbs().maxCoeff() / scale;
 }
 
-MeasurementInformation measurementInformation(const Pose2& x, const Vec2& y,
-                                              const Observation& z, const Mat2& Z_inv) {
+MeasurementInformation measurementInformation(const MeasurementModel& sensor, const Pose2& x,
+                                              const Vec2& y, const Observation& z, const Mat2& Z_inv) {
   Mat23 J_x;
   Mat2 J_y;
-  const Vec2 zhat = RangeBearingModel::predict(x, y, &J_x, &J_y);
+  const Vec2 zhat = sensor.predict(x, y, &J_x, &J_y);
   Eigen::Matrix<double, 2, 5> J;
   J << J_x, J_y;
   Eigen::Matrix<double, 5, 1> mu_local;
   mu_local << x, y;
-  const Vec2 nu = RangeBearingModel::innovation(Vec2(z.range, z.bearing), zhat);
+  const Vec2 nu = sensor.residual(z.z, zhat);
   const Eigen::Matrix<double, 5, 2> JtZ = J.transpose() * Z_inv;
   MeasurementInformation info;
   info.H = JtZ * J;

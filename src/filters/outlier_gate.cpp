@@ -1,5 +1,4 @@
 #include <seif/filters/outlier_gate.hpp>
-#include <seif/models/range_bearing.hpp>
 
 #include <cmath>
 #include <stdexcept>
@@ -14,9 +13,10 @@ OutlierGate::OutlierGate(double sigmas) : sigmas_(sigmas), threshold_(sigmas * s
   }
 }
 
-bool OutlierGate::rejects(const Pose2& x, const Vec2& y, const Observation& z, const Mat2& Z_inv) {
+bool OutlierGate::rejects(const MeasurementModel& sensor, const Pose2& x, const Vec2& y,
+                          const Observation& z, const Mat2& Z_inv) {
   if (std::isinf(sigmas_)) return false;
-  const Vec2 nu = RangeBearingModel::innovation(Vec2(z.range, z.bearing), RangeBearingModel::predict(x, y));
+  const Vec2 nu = sensor.residual(z.z, sensor.predict(x, y));
   const bool reject = !(nu.dot(Z_inv * nu) <= threshold_);  // NaN innovations are rejected too
   if (reject) ++rejected_;
   return reject;

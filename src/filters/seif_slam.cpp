@@ -2,8 +2,6 @@
 #include <seif/core/errors.hpp>
 #include <seif/core/sparse_marginals.hpp>
 #include <seif/filters/seif_slam.hpp>
-#include <seif/models/range_bearing.hpp>
-#include <seif/models/velocity_motion.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -43,7 +41,8 @@ SeifOptions::RelaxOrder SeifOptions::parseRelaxOrder(std::string_view s) {
 
 
 SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const SeifOptions& options)
-    : config_(config),
+    : SlamFilter(config),
+      config_(config),
       gate_(config.outlier_gate),
       options_(options),
       H_xx_(config.initial_pose_sigma.cwiseAbs2().cwiseInverse().asDiagonal()),
@@ -160,22 +159,19 @@ void SeifSlam::removeRobotLink(int slot) {
 
 // ---------------------------------------------------------------- the four steps -------
 
-void SeifSlam::predict(const VelocityControl& u) { motionUpdate(u); }
+void SeifSlam::predict(const MotionIncrement& increment) { motionUpdate(increment); }
 
-void SeifSlam::motionUpdate(const VelocityControl& u) {
+void SeifSlam::motionUpdate(const MotionIncrement& m) {
   ++step_;
   blocks_touched_ = 0;
   last_sparsification_residual_ = 0.0;
-  Mat3 J_x;
-  const Vec3 delta = VelocityMotionModel::delta(mu_x_, u, &J_x);
-  const Mat3 U = VelocityMotionModel::processNoise(mu_x_, u, config_.noise.sigma_v, config_.noise.sigma_w);
   // §1: Lemma 3 on the {robot, active} block, the only part of H that motion changes.
   order_.clear();
   for (const RobotLink& l : robot_links_) order_.push_back(l.slot);
   gather(order_);
   const Eigen::Index n = local_H_.rows();
   workspace_.resize(6, n);
-  informationMotionUpdate(local_H_, local_b_, local_mu_, delta, J_x, U, workspace_);
+  informationMotionUpdate(local_H_, local_b_, local_mu_, m.delta, m.J_delta_x, m.U, workspace_);
   scatter(order_);
 }
 
@@ -297,22 +293,22 @@ void SeifSlam::relaxMean(int sweeps) {
   }
 }
 
-void SeifSlam::measurementUpdate(std::span<const Observation> observations) {
+void SeifSlam::measurementUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
   invalidateFactor();
   // §3, paper eq. (21-22): every observation linearised at the current mean.
-  const Mat2 Z_inv =
-      RangeBearingModel::noise(config_.noise.sigma_range, config_.noise.sigma_bearing).inverse();
   for (const Observation& z : observations) {
+    requireAssociated(z, "seif");
+    const Mat2 Z_inv = sensor.noise(z).inverse();
     int slot = index_.find(z.landmark);
     if (slot < 0) {  // a new landmark: no information yet, mean from the inverse model
       slot = index_.add(z.landmark);
       nodes_.emplace_back();
-      nodes_.back().mu = RangeBearingModel::inverse(mu_x_, Vec2(z.range, z.bearing));
-    } else if (gate_.rejects(mu_x_, nodes_[static_cast<std::size_t>(slot)].mu, z, Z_inv)) {
+      nodes_.back().mu = sensor.inverse(mu_x_, z.z);
+    } else if (gate_.rejects(sensor, mu_x_, nodes_[static_cast<std::size_t>(slot)].mu, z, Z_inv)) {
       continue;  // a gross outlier (OutlierGate)
     }
     Node& node = nodes_[static_cast<std::size_t>(slot)];
-    const MeasurementInformation info = measurementInformation(mu_x_, node.mu, z, Z_inv);
+    const MeasurementInformation info = measurementInformation(sensor, mu_x_, node.mu, z, Z_inv);
     H_xx_ += info.H.topLeftCorner<3, 3>();
     b_x_ += info.b.head<3>();
     node.H += info.H.bottomRightCorner<2, 2>();
@@ -366,11 +362,11 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first) {
   for (int i = 0; i < drop; ++i) removeRobotLink(ranking_[static_cast<std::size_t>(i)].second);
 }
 
-void SeifSlam::update(std::span<const Observation> observations) {
+void SeifSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
   const bool amortized = options_.mean == SeifOptions::Mean::Amortized;
   const bool book_order = options_.recovery == SeifOptions::Recovery::BeforeMeasurement;
   if (amortized && book_order) recoverMean();
-  measurementUpdate(observations);
+  measurementUpdate(observations, sensor);
   if (!amortized) {
     recoverExactMean();  // sparsification then keeps this mean exactly
   } else if (!book_order) {
@@ -460,6 +456,23 @@ Mat3 SeifSlam::poseCovariance() const { return factor().covarianceBlock<3>(0); }
 
 Mat2 SeifSlam::landmarkCovariance(int id) const {
   return factor().covarianceBlock<2>(LandmarkIndex::stateIndex(index_.require(id, "seif")));
+}
+
+PredictedMeasurement SeifSlam::predictMeasurement(int id, const MeasurementModel& sensor,
+                                                 const Mat2& R) const {
+  const int slot = index_.require(id, "seif");
+  const int i = LandmarkIndex::stateIndex(slot);
+  // The landmark's two columns of Sigma (two solves with the cached factor) give its
+  // block and its cross-covariance with the pose.
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(3 + 2 * index_.size());
+  Eigen::Matrix<double, Eigen::Dynamic, 2> cols(e.size(), 2);
+  for (int c = 0; c < 2; ++c) {
+    e.setZero();
+    e(i + c) = 1.0;
+    cols.col(c) = factor().solve(e);
+  }
+  return innovation(sensor, mu_x_, nodes_[static_cast<std::size_t>(slot)].mu, poseCovariance(),
+                    cols.topRows<3>(), cols.middleRows<2>(i), R);
 }
 
 std::vector<int> SeifSlam::activeLandmarks() const {

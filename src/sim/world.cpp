@@ -309,6 +309,7 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
   log.groundtruth.push_back({0.0, x});
   // One blind zone for the true and the reported range: neither is logged below it.
   const double blind_zone = std::max(kMinDetectionRange, c.min_range);
+  const RangeBearingModel sensor(1.0, 1.0);  // geometry only: the noise is drawn below
   for (std::size_t k = 0; k < T; ++k) {
     const Pose2 next = reference(k + 1);
     const VelocityControl u = track(x, ref, next, c.speed, c.dt);
@@ -329,7 +330,7 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
     st.max_detections_per_step = std::max(st.max_detections_per_step, found.size());
     if (found.empty()) ++st.steps_without_detection;
     for (const std::uint32_t i : found) {
-      const Vec2 z = RangeBearingModel::predict(x, landmarks[i]);
+      const Vec2 z = sensor.predict(x, landmarks[i]);
       const auto [e_r, e_b] = rng.normalPair();
       const double range = z.x() + c.noise.sigma_range * e_r;
       if (range < blind_zone) {  // the sensor reports no range inside its blind zone

@@ -3,6 +3,9 @@
 // [x, y, theta, l1x, l1y, l2x, ...], angles in radians wrapped to (-pi, pi].
 #include <Eigen/Core>
 
+#include <optional>
+#include <variant>
+
 namespace seif {
 
 using Vec2 = Eigen::Vector2d;
@@ -21,11 +24,34 @@ struct VelocityControl {
   double dt = 0.0;
 };
 
-/// One range-bearing observation of a landmark with a known identity.
+/// A control of a car-like (Ackermann) vehicle: speed measured at the encoder [m/s] and
+/// the steering angle of the front wheels [rad, left positive], applied for dt seconds.
+struct AckermannControl {
+  double speed = 0.0;
+  double steering = 0.0;
+  double dt = 0.0;
+};
+
+/// A relative-odometry record: the next pose in the frame of the current one (dx, dy, dth)
+/// with its own 3x3 covariance (iSAM, g2o and DLR-style logs).
+struct OdometryIncrement {
+  Vec3 delta = Vec3::Zero();
+  Mat3 covariance = Mat3::Identity();
+};
+
+/// What moves the vehicle over one step: each motion model (models/) takes one of these.
+using MotionInput = std::variant<VelocityControl, AckermannControl, OdometryIncrement>;
+
+/// Landmark id of an observation whose association is unknown (the association step decides).
+inline constexpr int kUnknownLandmark = -1;
+
+/// One observation of a point landmark, in the units of the sensor model that made it
+/// (range-bearing: (range [m], bearing [rad], sensor frame, x forward, left positive);
+/// Cartesian: (x, y) [m] in the sensor frame).
 struct Observation {
-  int landmark = -1;     ///< landmark id (data association is known)
-  double range = 0.0;    ///< [m]
-  double bearing = 0.0;  ///< [rad], robot frame, x forward, left positive
+  int landmark = kUnknownLandmark;  ///< landmark id when the association is known
+  Vec2 z = Vec2::Zero();
+  std::optional<Mat2> noise;        ///< its own 2x2 covariance; the sensor's default when empty
 };
 
 /// Standard deviations of the control and measurement noise.

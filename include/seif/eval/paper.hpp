@@ -8,7 +8,7 @@
 #include <seif/eval/run.hpp>
 #include <seif/filters/seif_slam.hpp>
 #include <seif/filters/slam_filter.hpp>
-#include <seif/io/dataset.hpp>
+#include <seif/core/dataset.hpp>
 #include <seif/sim/world.hpp>
 
 #include <Eigen/Core>

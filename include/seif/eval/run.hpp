@@ -2,7 +2,7 @@
 // Runs a filter over a dataset and measures it: the one loop behind `seif run`,
 // `seif paper` and `seif bench`.
 #include <seif/filters/slam_filter.hpp>
-#include <seif/io/dataset.hpp>
+#include <seif/core/dataset.hpp>
 
 #include <cstddef>
 #include <functional>
@@ -32,7 +32,7 @@ RunOutput runFilter(SlamFilter& filter, const Dataset& data,
                     const std::function<void(std::size_t, std::size_t)>& progress = {});
 
 /// Integrates the controls alone from `start` (dead reckoning), at the same stamps as runFilter.
-std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start);
+std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start, const MotionModel& motion);
 
 /// Whether an error is measured in the ground truth's frame as it is (the filters start at
 /// the true pose) or after the rigid 2-D motion that best aligns estimate and truth

@@ -17,8 +17,12 @@ class EifSlam final : public SlamFilter {
   EifSlam(const Pose2& initial_pose, const FilterConfig& config);
 
   std::string name() const override { return "eif"; }
-  void predict(const VelocityControl& u) override;
-  void update(std::span<const Observation> observations) override;
+  using SlamFilter::predict;
+  using SlamFilter::update;
+  void predict(const MotionIncrement& increment) override;
+  void update(std::span<const Observation> observations, const MeasurementModel& sensor) override;
+  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
+                                          const Mat2& R) const override;
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
@@ -37,6 +41,9 @@ class EifSlam final : public SlamFilter {
   Eigen::MatrixXd covariance() const override;
   Eigen::MatrixXd information() const override { return H_; }
   const Eigen::VectorXd& informationVector() const { return b_; }
+
+ protected:
+  Pose2 linearizationPose() const override { return mu_.head<3>(); }
 
  private:
   void recoverMean();

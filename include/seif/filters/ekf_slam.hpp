@@ -16,8 +16,12 @@ class EkfSlam final : public SlamFilter {
   EkfSlam(const Pose2& initial_pose, const FilterConfig& config);
 
   std::string name() const override { return "ekf"; }
-  void predict(const VelocityControl& u) override;
-  void update(std::span<const Observation> observations) override;
+  using SlamFilter::predict;
+  using SlamFilter::update;
+  void predict(const MotionIncrement& increment) override;
+  void update(std::span<const Observation> observations, const MeasurementModel& sensor) override;
+  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
+                                          const Mat2& R) const override;
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override { return sigma_.topLeftCorner<3, 3>(); }
@@ -36,8 +40,11 @@ class EkfSlam final : public SlamFilter {
   Eigen::MatrixXd covariance() const override { return sigma_; }
   Eigen::MatrixXd information() const override;
 
+ protected:
+  Pose2 linearizationPose() const override { return mu_.head<3>(); }
+
  private:
-  void addLandmark(const Observation& z);
+  void addLandmark(const Observation& z, const MeasurementModel& sensor);
 
   FilterConfig config_;
   OutlierGate gate_;

@@ -2,6 +2,7 @@
 // The information-form steps shared by the EIF (on its whole matrix) and the SEIF (on the
 // small dense block it gathers around the robot). One implementation of each equation.
 #include <seif/core/types.hpp>
+#include <seif/models/measurement_model.hpp>
 
 #include <Eigen/Core>
 
@@ -41,15 +42,15 @@ using LocalVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kM
 double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
                            const Eigen::Ref<const Eigen::VectorXd>& mu, int drop);
 
-/// Information added by one range-bearing observation, paper eq. (21-22), ordered
-/// [robot (3), landmark (2)]:  dH = J^T Z^-1 J,  db = J^T Z^-1 (z - zhat + J mu),
-/// linearised at the robot mean x and landmark mean y; the bearing innovation is wrapped.
+/// Information added by one observation, paper eq. (21-22), ordered [robot (3),
+/// landmark (2)]:  dH = J^T Z^-1 J,  db = J^T Z^-1 (z - zhat + J mu), linearised at the
+/// robot mean x and landmark mean y; z - zhat is the sensor's residual (bearing wrapped).
 struct MeasurementInformation {
   Eigen::Matrix<double, 5, 5> H;
   Eigen::Matrix<double, 5, 1> b;
 };
-MeasurementInformation measurementInformation(const Pose2& x, const Vec2& y,
-                                              const Observation& z, const Mat2& Z_inv);
+MeasurementInformation measurementInformation(const MeasurementModel& sensor, const Pose2& x,
+                                              const Vec2& y, const Observation& z, const Mat2& Z_inv);
 
 /// Counts the links of a dense information matrix in the state order [robot, landmarks]:
 /// non-zero off-diagonal blocks, the robot's links and the largest landmark degree.

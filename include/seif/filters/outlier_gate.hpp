@@ -11,6 +11,7 @@
 // it is no substitute for a chi-square gate on the innovation covariance. A landmark's first
 // sighting has no prediction and is never rejected.
 #include <seif/core/types.hpp>
+#include <seif/models/measurement_model.hpp>
 
 #include <cstddef>
 #include <limits>
@@ -22,9 +23,10 @@ class OutlierGate {
   /// `sigmas` > 0; infinity disables the gate.
   explicit OutlierGate(double sigmas);
 
-  /// Whether z is rejected at robot pose x and landmark mean y (and counts it if so).
-  /// Z_inv is the inverse measurement noise.
-  bool rejects(const Pose2& x, const Vec2& y, const Observation& z, const Mat2& Z_inv);
+  /// Whether z, made by `sensor`, is rejected at robot pose x and landmark mean y (and
+  /// counts it if so). Z_inv is the inverse of the observation's noise.
+  bool rejects(const MeasurementModel& sensor, const Pose2& x, const Vec2& y, const Observation& z,
+               const Mat2& Z_inv);
 
   std::size_t rejected() const { return rejected_; }
   double sigmas() const { return sigmas_; }

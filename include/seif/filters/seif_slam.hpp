@@ -61,8 +61,12 @@ class SeifSlam final : public SlamFilter {
   ~SeifSlam() override;
 
   std::string name() const override { return "seif"; }
-  void predict(const VelocityControl& u) override;
-  void update(std::span<const Observation> observations) override;
+  using SlamFilter::predict;
+  using SlamFilter::update;
+  void predict(const MotionIncrement& increment) override;
+  void update(std::span<const Observation> observations, const MeasurementModel& sensor) override;
+  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
+                                          const Mat2& R) const override;
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
@@ -84,10 +88,11 @@ class SeifSlam final : public SlamFilter {
   // the sparsification first re-solving the robot-active block's mean on the block it gathers
   // (Recovery::AfterMeasurement: recoverMean() after measurementUpdate(), no re-solve; exact
   // mean: measurementUpdate(z); recoverExactMean(); sparsify()).
-  void motionUpdate(const VelocityControl& u);              ///< §1, Lemma 3
+  void motionUpdate(const MotionIncrement& increment);      ///< §1, Lemma 3
   void recoverMean();                                      ///< §2, amortised, eq. (42)
   void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
-  void measurementUpdate(std::span<const Observation> z);  ///< §3, eq. (21-22)
+  void measurementUpdate(std::span<const Observation> z,
+                         const MeasurementModel& sensor);  ///< §3, eq. (21-22)
   void sparsify();                                         ///< §4, eq. (44-51)
 
   const SeifOptions& options() const { return options_; }
@@ -103,6 +108,9 @@ class SeifSlam final : public SlamFilter {
   /// Largest relative magnitude the sparsification formula left in a removed robot link
   /// during the last step (zero up to rounding, by paper eq. 44-51); 0 when none removed.
   double lastSparsificationResidual() const { return last_sparsification_residual_; }
+
+ protected:
+  Pose2 linearizationPose() const override { return mu_x_; }
 
  private:
   struct Link {

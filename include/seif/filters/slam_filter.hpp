@@ -1,7 +1,12 @@
 #pragma once
-// The one interface of every SLAM filter in seif (EKF, EIF, SEIF). Known data association:
-// observations carry landmark ids; an id seen for the first time is added to the map.
+// The one interface of every SLAM filter in seif (EKF, EIF, SEIF). A filter consumes a
+// linearised motion increment (models/motion_model.hpp) and observations with the sensor
+// model that made them (models/measurement_model.hpp); it never names a concrete model.
+// Known data association: observations carry landmark ids; an id seen for the first time
+// is added to the map. Unknown association builds on predictMeasurement().
 #include <seif/core/types.hpp>
+#include <seif/models/measurement_model.hpp>
+#include <seif/models/motion_model.hpp>
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -13,6 +18,11 @@
 namespace seif {
 
 struct FilterConfig {
+  /// The models of the convenience calls predict(MotionInput) and update(observations).
+  /// When empty, the paper's: VelocityModel(noise.sigma_v, noise.sigma_w, PerStep) and
+  /// RangeBearingModel(noise.sigma_range, noise.sigma_bearing) at the vehicle's origin.
+  std::shared_ptr<const MotionModel> motion;
+  std::shared_ptr<const MeasurementModel> sensor;
   NoiseModel noise;
   /// Initial pose standard deviations (x [m], y [m], theta [rad]). Information filters need
   /// a finite prior, so the start pose is anchored with this (small) uncertainty.
@@ -30,23 +40,47 @@ struct FilterStats {
   std::size_t blocks_touched = 0;      ///< H blocks read or written by the last step
 };
 
+/// A landmark's predicted measurement and its innovation covariance S = J Sigma J^T + R
+/// (J over the pose and the landmark): what a data-association test needs.
+struct PredictedMeasurement {
+  Vec2 z = Vec2::Zero();
+  Mat2 S = Mat2::Zero();
+};
+
 class SlamFilter {
  public:
+  explicit SlamFilter(const FilterConfig& config);
   virtual ~SlamFilter() = default;
 
   virtual std::string name() const = 0;
 
-  /// Motion update with the velocity model.
-  virtual void predict(const VelocityControl& u) = 0;
+  /// Motion update with an increment linearised at this filter's pose estimate.
+  virtual void predict(const MotionIncrement& increment) = 0;
 
-  /// Measurement update with all observations made at one instant (one linearisation point).
-  virtual void update(std::span<const Observation> observations) = 0;
+  /// Measurement update with all observations made at one instant (one linearisation
+  /// point), each with `sensor.noise(z)`.
+  virtual void update(std::span<const Observation> observations, const MeasurementModel& sensor) = 0;
 
-  /// predict(u) then update(z): one filter cycle.
-  void step(const VelocityControl& u, std::span<const Observation> observations) {
+  /// predict() with the config's motion model linearised at linearizationPose().
+  void predict(const MotionInput& u) { predict(motion_->linearize(linearizationPose(), u)); }
+  /// update() with the config's sensor model.
+  void update(std::span<const Observation> observations) { update(observations, *sensor_); }
+  /// predict(u) then update(z): one filter cycle with the config's models.
+  void step(const MotionInput& u, std::span<const Observation> observations) {
     predict(u);
     update(observations);
   }
+
+  const MotionModel& motionModel() const { return *motion_; }
+  const MeasurementModel& sensorModel() const { return *sensor_; }
+
+  /// The measurement `sensor` would predict for landmark `id` at the current estimate, and
+  /// its innovation covariance with measurement noise R. EKF: O(1) reads of its covariance;
+  /// EIF: one solve with its dense factor; SEIF: exact, two solves with the sparse factor
+  /// (O(N) once per state; constant-time local forms come with covariance recovery).
+  /// Throws std::out_of_range for an id not in the map.
+  virtual PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
+                                                  const Mat2& R) const = 0;
 
   virtual Pose2 pose() const = 0;
   /// Marginal covariances. EKF: read off its covariance, O(1). EIF: a solve with its cached
@@ -74,6 +108,20 @@ class SlamFilter {
   virtual Eigen::VectorXd mean() const = 0;
   virtual Eigen::MatrixXd covariance() const = 0;
   virtual Eigen::MatrixXd information() const = 0;
+
+ protected:
+  /// The pose the convenience predict() linearises at (the filter's own, unwrapped).
+  virtual Pose2 linearizationPose() const { return pose(); }
+  /// S = J_x Sxx J_x^T + J_x Sxy J_y^T + (..)^T + J_y Syy J_y^T + R, and zhat.
+  static PredictedMeasurement innovation(const MeasurementModel& sensor, const Pose2& x,
+                                         const Vec2& y, const Mat3& Sxx, const Mat32& Sxy,
+                                         const Mat2& Syy, const Mat2& R);
+  /// Throws ModelError for an observation without a landmark id (known association only).
+  static void requireAssociated(const Observation& z, const char* filter);
+
+ private:
+  std::shared_ptr<const MotionModel> motion_;
+  std::shared_ptr<const MeasurementModel> sensor_;
 };
 
 }  // namespace seif

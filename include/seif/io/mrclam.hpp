@@ -25,7 +25,7 @@
 //
 // Files: a missing optional file (or a dangling symbolic link) is skipped; a symbolic-link
 // loop, a folder or an unreadable file is a DataError naming the file.
-#include <seif/io/dataset.hpp>
+#include <seif/core/dataset.hpp>
 
 #include <filesystem>
 #include <functional>

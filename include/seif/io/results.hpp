@@ -3,7 +3,7 @@
 // map.csv (id, x, y, and the 2x2 marginal covariance). Both are written atomically
 // (AtomicFile): complete, or absent.
 #include <seif/filters/slam_filter.hpp>
-#include <seif/io/dataset.hpp>
+#include <seif/core/dataset.hpp>
 
 #include <filesystem>
 #include <vector>

@@ -1,31 +1,26 @@
 #pragma once
-// Range-bearing measurement of a 2-D point landmark (algorithm.md "Models").
-// z = (sqrt(q), atan2(dy, dx) - th), d = y - (px, py), q = d^T d.
-#include <seif/core/types.hpp>
+// Range-bearing measurement of a 2-D point landmark (algorithm.md "Models"), in the sensor
+// frame s: z = (sqrt(q), atan2(dy, dx) - th_s), d = y - s_xy, q = d^T d.
+#include <seif/models/measurement_model.hpp>
 
 namespace seif {
 
-class RangeBearingModel {
+class RangeBearingModel final : public MeasurementModel {
  public:
   /// Ranges below this are degenerate (bearing undefined): predict() throws ModelError.
   static constexpr double kMinRange = 1e-9;
 
-  /// Predicted measurement (range, bearing wrapped to (-pi, pi]) and optional Jacobians
-  /// J_z_x = dz/dx (2x3), J_z_y = dz/dy (2x2).
-  static Vec2 predict(const Pose2& x, const Vec2& y, Mat23* J_z_x = nullptr,
-                      Mat2* J_z_y = nullptr);
+  RangeBearingModel(double sigma_range, double sigma_bearing, const Pose2& mount = Pose2::Zero());
+  RangeBearingModel(const Mat2& noise, const Pose2& mount = Pose2::Zero());
 
-  /// Inverse model: the landmark seen at z = (range, bearing) from pose x, with
-  /// J_y_x = dy/dx (2x3) and J_y_z = dy/dz (2x2). Throws ModelError for range <= 0 or
-  /// non-finite input.
-  static Vec2 inverse(const Pose2& x, const Vec2& z, Mat23* J_y_x = nullptr,
-                      Mat2* J_y_z = nullptr);
+  std::string describe() const override;
+  /// z - zhat with the bearing wrapped to (-pi, pi].
+  Vec2 residual(const Vec2& z, const Vec2& zhat) const override;
 
-  /// Innovation z - zhat with the bearing wrapped to (-pi, pi].
-  static Vec2 innovation(const Vec2& z, const Vec2& zhat);
-
-  /// Measurement noise Z = diag(sigma_range^2, sigma_bearing^2).
-  static Mat2 noise(double sigma_range, double sigma_bearing);
+ protected:
+  Vec2 predictFromSensor(const Pose2& s, const Vec2& y, Mat23* J_z_s, Mat2* J_z_y) const override;
+  /// Throws ModelError for range <= 0 or non-finite input.
+  Vec2 inverseFromSensor(const Pose2& s, const Vec2& z, Mat23* J_y_s, Mat2* J_y_z) const override;
 };
 
 }  // namespace seif

@@ -8,7 +8,7 @@
 // in a fixed order (landmarks, then per step: motion noise, then the measurement noise of
 // the detections in subject order), so one config gives a bit-identical log.
 #include <seif/core/types.hpp>
-#include <seif/io/dataset.hpp>
+#include <seif/core/dataset.hpp>
 
 #include <cstddef>
 #include <cstdint>

@@ -1,8 +1,8 @@
 // Merging the independent time stamps of a RobotLog into filter steps
-// (include/seif/io/dataset.hpp).
+// (include/seif/core/dataset.hpp).
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
-#include <seif/io/dataset.hpp>
+#include <seif/core/dataset.hpp>
 
 #include <algorithm>
 #include <cstddef>
@@ -63,7 +63,7 @@ Dataset buildDataset(const RobotLog& log) {
       s.u = VelocityControl{odo[i].v, odo[i].w, s.time - now};
       while (m < order.size() && meas[order[m]].time == s.time) {
         const MeasurementRecord& r = meas[order[m]];
-        s.observations.push_back(Observation{r.subject, r.range, r.bearing});
+        s.observations.push_back(Observation{r.subject, Vec2(r.range, r.bearing), std::nullopt});
         ++m;
       }
       now = s.time;

@@ -1,13 +1,18 @@
 #pragma once
-// The one data flow of seif:  simulator or files -> RobotLog -> Dataset (steps) -> filter.
-// A RobotLog mirrors the UTIAS MRCLAM files of one robot (barcodes already mapped to
-// subjects); buildDataset() merges its independent time stamps into filter steps.
+// The vocabulary every source of data shares (docs/architecture.md "The flow"):
+//   events   time-ordered records a reader or the simulator yields: a control or odometry
+//            record, the observations of one instant, a ground-truth pose, a GPS fix;
+//   Step     one filter cycle (predict with an input, then update with observations),
+//            which the run loop assembles from events (eval/run.hpp);
+//   RobotLog one robot's records in memory, as the simulator makes them and the MRCLAM
+//            layout stores them; buildDataset() merges their stamps into steps.
 #include <seif/core/types.hpp>
 
 #include <cstddef>
 #include <map>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace seif {
@@ -30,6 +35,35 @@ struct TimedPose {
   Pose2 pose = Pose2::Zero();
 };
 
+/// A GPS fix: position in the dataset's local metric frame [m].
+struct GpsFix {
+  double time = 0.0;
+  Vec2 position = Vec2::Zero();
+};
+
+// --- events --------------------------------------------------------------------------------
+
+/// A control or odometry record. A VelocityControl or AckermannControl is a rate, in force
+/// from `time` until the next control (its dt is ignored: the run loop sets it); an
+/// OdometryIncrement is the motion from the previous record's pose to the pose at `time`.
+struct ControlEvent {
+  double time = 0.0;
+  MotionInput input;
+};
+
+/// The observations made at one instant (one linearisation point).
+struct ObservationEvent {
+  double time = 0.0;
+  std::vector<Observation> observations;
+};
+
+/// One event of a data stream. At equal stamps a source yields observations before the
+/// control that starts there (that control acts after them).
+using Event = std::variant<ControlEvent, ObservationEvent, TimedPose, GpsFix>;
+
+inline double eventTime(const Event& e) {
+  return std::visit([](const auto& v) { return v.time; }, e);
+}
 /// What was dropped while reading, and why (reported, never silently lost).
 struct DropCounts {
   std::size_t robot_measurements = 0;     ///< measurements of other robots (subjects 1-5)
@@ -53,7 +87,7 @@ struct RobotLog {
 /// observations made at `time` (possibly none).
 struct Step {
   double time = 0.0;
-  VelocityControl u;
+  MotionInput u;
   std::vector<Observation> observations;
 };
 

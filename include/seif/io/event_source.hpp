@@ -1,0 +1,91 @@
+#pragma once
+// The reader seam (docs/architecture.md "The flow"): every dataset format is an
+// EventSource that yields time-ordered events (core/dataset.hpp) and describes itself in a
+// DatasetInfo: the vehicle's motion model, the sensor (with its mount), the noise used and
+// where each value came from, the start pose and ground-truth landmarks when known.
+// A source streams: it holds a few lines of its files, never the whole log, so a run's
+// memory is the filter's. openDataset() picks the reader for a path.
+#include <seif/core/dataset.hpp>
+#include <seif/models/measurement_model.hpp>
+#include <seif/models/motion_model.hpp>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace seif {
+
+/// One noise value a run uses, and where it came from ("file", "meta.json",
+/// "command line", "default for <format>").
+struct NoiseSetting {
+  std::string name;   ///< e.g. "sigma_v"
+  double value = 0.0;
+  std::string unit;   ///< e.g. "m/s/sqrt(s)"
+  std::string source;
+};
+
+struct DatasetInfo {
+  std::string source;  ///< the path as given
+  std::string format;  ///< "mrclam", "victoria-park", "isam", "g2o"
+  std::shared_ptr<const MotionModel> motion;
+  std::shared_ptr<const MeasurementModel> sensor;
+  std::vector<NoiseSetting> noise;
+  /// Where the filter starts, and why there ("ground truth at the first control",
+  /// "first VERTEX_SE2 of the file", "origin: the dataset has no ground truth", ...).
+  Pose2 start_pose = Pose2::Zero();
+  std::string start_pose_source;
+  std::map<int, Vec2> landmarks;  ///< ground-truth landmark positions; may be empty
+  bool has_groundtruth = false;   ///< the stream carries TimedPose events
+  bool has_gps = false;           ///< the stream carries GpsFix events
+};
+
+/// What a reader opens with. Noise values by name override the file's and the format's
+/// defaults (their source becomes "command line"); a name the format does not use is an
+/// error naming the names it does use.
+struct DatasetOptions {
+  int robot = 1;                        ///< MRCLAM: which robot's log
+  std::map<std::string, double> noise;  ///< e.g. {"sigma_v", 0.05}
+};
+
+class EventSource {
+ public:
+  virtual ~EventSource() = default;
+  virtual const DatasetInfo& info() const = 0;
+  /// The next event in time order; false at the end. Throws DataError "file:line: what".
+  virtual bool next(Event& event) = 0;
+  /// Fraction of the input read so far, in [0, 1] (for a progress bar).
+  virtual double progress() const = 0;
+  /// Records dropped so far, by reason (e.g. {"unknown_barcodes", 43}), reported, never silent.
+  virtual std::map<std::string, std::size_t> dropped() const { return {}; }
+};
+
+enum class DatasetFormat { Auto, Mrclam, VictoriaPark, Isam, G2o };
+
+/// "auto" | "mrclam" | "victoria-park" | "isam" | "g2o"; throws std::invalid_argument
+/// naming them.
+DatasetFormat parseDatasetFormat(std::string_view name);
+std::string_view datasetFormatName(DatasetFormat format);
+
+/// Opens `path` with the reader of `format`; Auto picks it from what the path holds and,
+/// when it cannot tell, throws DataError naming the path and listing every format with
+/// what it looks for.
+std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path,
+                                         DatasetFormat format = DatasetFormat::Auto,
+                                         const DatasetOptions& options = {});
+
+/// Resolves one noise value: the command line's (options), else the file's, else the
+/// format's default; records it in `info.noise`. Throws std::invalid_argument for a value
+/// that is not finite and > 0.
+double resolveNoise(DatasetInfo& info, const DatasetOptions& options, const std::string& name,
+                    const std::string& unit, std::optional<double> from_file,
+                    const std::string& file_source, double default_value);
+
+/// Throws std::invalid_argument when `options.noise` names a value outside `known`.
+void checkNoiseNames(const DatasetOptions& options, const std::vector<std::string>& known,
+                     std::string_view format);
+
+}  // namespace seif

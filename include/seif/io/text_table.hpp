@@ -1,0 +1,103 @@
+#pragma once
+// The strict parser of whitespace-separated text tables that every reader shares
+// (MRCLAM, Victoria Park, iSAM, g2o). Rules, the same for every format:
+// - a line whose first non-blank character is '#' and a blank line are skipped;
+// - fields are separated by spaces, tabs, '\v', '\f' (a trailing '\r' is ignored);
+// - line numbers count every line from 1, comments included;
+// - numbers must parse completely (std::from_chars) and be finite; integers must be integers.
+// Every failure is a DataError "file:line: what", naming the column when there is one.
+//
+// A table reads either text held in memory (fuzzing, tests) or a file in chunks, so a
+// reader's memory does not grow with the file.
+#include <seif/core/errors.hpp>
+
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace seif {
+
+class TextTable {
+ public:
+  /// Most fields a line may have (g2o's EDGE_SE2 has 12).
+  static constexpr std::size_t kMaxFields = 16;
+
+  /// A table over `text` (which must outlive it); `name` names it in messages.
+  TextTable(std::string name, std::string_view text);
+  /// A table over the file at `path`, read in chunks. Throws DataError naming the file when
+  /// it is missing, not a regular file, a symbolic-link loop or unreadable.
+  static TextTable open(const std::filesystem::path& path);
+
+  TextTable(TextTable&&) noexcept;
+  TextTable& operator=(TextTable&&) noexcept;
+  ~TextTable();
+
+  /// Advances to the next data line; false at the end of the input.
+  bool next();
+
+  const std::string& name() const { return name_; }
+  long line() const { return line_; }
+  /// Fields of the current line.
+  std::size_t size() const { return count_; }
+  std::string_view field(std::size_t col) const { return fields_[col]; }
+
+  /// Names the columns of the current line (for messages) and checks their number.
+  /// `what` names the record in the message ("expected 4 fields (time v w x) in ODOMETRY").
+  void expect(std::initializer_list<const char*> columns, std::string_view what = {});
+
+  /// Column `col` (0-based) as a finite double / an int / a non-negative long long.
+  double real(std::size_t col) const;
+  int integer(std::size_t col) const;
+  long long index(std::size_t col) const;
+
+  [[noreturn]] void fail(const std::string& what) const;
+  /// "column 3 (range)", or "column 3" when the columns have no names.
+  std::string columnName(std::size_t col) const;
+
+ private:
+  bool split(std::string_view line);
+
+  std::string name_;
+  std::string_view text_;  // memory mode
+  std::size_t pos_ = 0;
+  std::unique_ptr<std::ifstream> file_;  // file mode
+  std::string buffer_;                   // the current line in file mode
+  long line_ = 0;
+  std::size_t count_ = 0;
+  std::array<std::string_view, kMaxFields> fields_{};
+  std::array<const char*, kMaxFields> columns_{};
+  std::size_t named_ = 0;
+};
+
+/// Time stamps of one file must not decrease (equal stamps are fine).
+class TimeOrder {
+ public:
+  void check(const TextTable& table, double time);
+
+ private:
+  double previous_ = -std::numeric_limits<double>::infinity();
+  long previous_line_ = 0;
+};
+
+/// The text of `path`, or nullopt when it does not exist (a dangling link included).
+/// Throws DataError naming the file when it exists but cannot be read.
+std::optional<std::string> readFileIfExists(const std::filesystem::path& path);
+
+/// Whether `path` exists as a regular file (following links); a link loop or an
+/// unreadable entry is a DataError naming it.
+bool regularFileExists(const std::filesystem::path& path);
+
+/// Shortest decimal form that reads back bit-identical (std::to_chars).
+std::string formatDouble(double x);
+
+/// A field as shown in a message: quoted, and shortened if absurdly long.
+std::string quotedField(std::string_view field);
+
+}  // namespace seif

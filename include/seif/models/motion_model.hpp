@@ -1,0 +1,30 @@
+#pragma once
+// The motion seam (docs/architecture.md): a motion model linearises one input at a pose to
+// a MotionIncrement, which is all a filter consumes (algorithm.md "Models"):
+//   s_t = s_{t-1} + S_x (delta + w),  w ~ N(0, U),  G_x = I_3 + J_delta_x.
+// A new vehicle is one new MotionModel; no filter changes.
+#include <seif/core/types.hpp>
+
+#include <string>
+
+namespace seif {
+
+struct MotionIncrement {
+  Vec3 delta = Vec3::Zero();      ///< pose increment Delta(x, u)
+  Mat3 J_delta_x = Mat3::Zero();  ///< dDelta/dx
+  Mat3 U = Mat3::Zero();          ///< process noise in pose space (may be singular)
+};
+
+class MotionModel {
+ public:
+  virtual ~MotionModel() = default;
+  /// One line for the console and metrics.json, with the parameters.
+  virtual std::string describe() const = 0;
+  /// The increment of input u at pose x. Throws ModelError when u is not this model's
+  /// input type or is not finite.
+  virtual MotionIncrement linearize(const Pose2& x, const MotionInput& u) const = 0;
+  /// x + Delta(x, u), heading wrapped to (-pi, pi] (dead reckoning).
+  Pose2 apply(const Pose2& x, const MotionInput& u) const;
+};
+
+}  // namespace seif

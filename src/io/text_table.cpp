@@ -1,0 +1,186 @@
+// The strict text-table parser shared by every reader (include/seif/io/text_table.hpp).
+#include <seif/io/text_table.hpp>
+
+#include <charconv>
+#include <cmath>
+#include <system_error>
+
+namespace seif {
+namespace fs = std::filesystem;
+
+std::string formatDouble(double x) {
+  std::array<char, 64> buf{};
+  const auto res = std::to_chars(buf.data(), buf.data() + buf.size(), x);
+  return std::string(buf.data(), res.ptr);
+}
+
+std::string quotedField(std::string_view field) {
+  constexpr std::size_t kMax = 40;
+  std::string q(1, '\'');
+  q.append(field.substr(0, std::min(field.size(), kMax)));
+  if (field.size() > kMax) q.append("...");
+  q.push_back('\'');
+  return q;
+}
+
+bool regularFileExists(const fs::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (status.type() == fs::file_type::not_found) return false;
+  if (ec == std::errc::too_many_symbolic_link_levels) {
+    throw DataError(name, 0, "symbolic-link loop: " + ec.message());
+  }
+  if (ec) throw DataError(name, 0, "cannot access file: " + ec.message());
+  if (!fs::is_regular_file(status)) throw DataError(name, 0, "not a regular file");
+  return true;
+}
+
+std::optional<std::string> readFileIfExists(const fs::path& path) {
+  if (!regularFileExists(path)) return std::nullopt;
+  const std::string name = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw DataError(name, 0, "cannot open file for reading");
+  std::string text;
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (!ec) text.reserve(static_cast<std::size_t>(size));
+  std::array<char, 1 << 16> chunk{};
+  while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.bad()) throw DataError(name, 0, "read error");
+  return text;
+}
+
+TextTable::TextTable(std::string name, std::string_view text) : name_(std::move(name)), text_(text) {}
+
+TextTable TextTable::open(const fs::path& path) {
+  if (!regularFileExists(path)) throw DataError(path.string(), 0, "missing required file");
+  TextTable t(path.string(), {});
+  t.file_ = std::make_unique<std::ifstream>(path, std::ios::binary);
+  if (!*t.file_) throw DataError(path.string(), 0, "cannot open file for reading");
+  return t;
+}
+
+TextTable::TextTable(TextTable&&) noexcept = default;
+TextTable& TextTable::operator=(TextTable&&) noexcept = default;
+TextTable::~TextTable() = default;
+
+bool TextTable::next() {
+  named_ = 0;
+  if (file_) {
+    while (std::getline(*file_, buffer_)) {
+      ++line_;
+      if (split(buffer_)) return true;
+    }
+    if (file_->bad()) throw DataError(name_, line_, "read error");
+    return false;
+  }
+  while (pos_ < text_.size()) {
+    std::size_t eol = text_.find('\n', pos_);
+    if (eol == std::string_view::npos) eol = text_.size();
+    const std::string_view line(text_.data() + pos_, eol - pos_);
+    pos_ = eol + 1;
+    ++line_;
+    if (split(line)) return true;
+  }
+  return false;
+}
+
+namespace {
+bool isBlank(char c) {
+  switch (c) {
+    case ' ': case '\t': case '\r': case '\v': case '\f': return true;
+    default: return false;
+  }
+}
+}  // namespace
+
+bool TextTable::split(std::string_view line) {
+  std::size_t i = 0;
+  std::size_t n = 0;
+  while (true) {
+    while (i < line.size() && isBlank(line[i])) ++i;
+    if (i == line.size()) break;
+    if (n == 0 && line[i] == '#') return false;
+    const std::size_t start = i;
+    while (i < line.size() && !isBlank(line[i])) ++i;
+    if (n < kMaxFields) fields_[n] = line.substr(start, i - start);
+    ++n;
+  }
+  if (n > kMaxFields) {
+    count_ = 0;
+    fail("too many fields (" + std::to_string(n) + ", at most " + std::to_string(kMaxFields) + ")");
+  }
+  count_ = n;
+  return n > 0;
+}
+
+void TextTable::expect(std::initializer_list<const char*> columns, std::string_view what) {
+  named_ = std::min(columns.size(), kMaxFields);
+  std::copy(columns.begin(), columns.begin() + static_cast<std::ptrdiff_t>(named_), columns_.begin());
+  if (count_ == columns.size()) return;
+  std::string names;
+  for (const char* c : columns) {
+    if (!names.empty()) names += ' ';
+    names += c;
+  }
+  std::string msg = "expected " + std::to_string(columns.size()) + " fields (" + names + ")";
+  if (!what.empty()) msg.append(" in ").append(what);
+  fail(msg + ", found " + std::to_string(count_));
+}
+
+std::string TextTable::columnName(std::size_t col) const {
+  std::string s("column ");
+  s.append(std::to_string(col + 1));
+  if (col < named_) s.append(" (").append(columns_[col]).append(")");
+  return s;
+}
+
+double TextTable::real(std::size_t col) const {
+  const std::string_view f = fields_[col];
+  double value = 0.0;
+  const auto res = std::from_chars(f.data(), f.data() + f.size(), value);
+  if (res.ec == std::errc::result_out_of_range && res.ptr == f.data() + f.size()) {
+    fail("number " + quotedField(f) + " out of range in " + columnName(col));
+  }
+  if (res.ec != std::errc() || res.ptr != f.data() + f.size()) {
+    fail("bad number " + quotedField(f) + " in " + columnName(col));
+  }
+  if (!std::isfinite(value)) fail("non-finite number " + quotedField(f) + " in " + columnName(col));
+  return value;
+}
+
+int TextTable::integer(std::size_t col) const {
+  const std::string_view f = fields_[col];
+  int value = 0;
+  const auto res = std::from_chars(f.data(), f.data() + f.size(), value);
+  if (res.ec != std::errc() || res.ptr != f.data() + f.size()) {
+    fail("bad integer " + quotedField(f) + " in " + columnName(col));
+  }
+  return value;
+}
+
+long long TextTable::index(std::size_t col) const {
+  const std::string_view f = fields_[col];
+  long long value = 0;
+  const auto res = std::from_chars(f.data(), f.data() + f.size(), value);
+  if (res.ec != std::errc() || res.ptr != f.data() + f.size() || value < 0) {
+    fail("bad id " + quotedField(f) + " in " + columnName(col) + " (expected an integer >= 0)");
+  }
+  return value;
+}
+
+void TextTable::fail(const std::string& what) const { throw DataError(name_, line_, what); }
+
+void TimeOrder::check(const TextTable& table, double time) {
+  if (time < previous_) {
+    table.fail("time " + formatDouble(time) + " goes backwards (line " +
+               std::to_string(previous_line_) + " has " + formatDouble(previous_) + ")");
+  }
+  previous_ = time;
+  previous_line_ = table.line();
+}
+
+}  // namespace seif
