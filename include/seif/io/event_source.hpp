@@ -8,6 +8,7 @@
 #include <seif/core/dataset.hpp>
 #include <seif/models/measurement_model.hpp>
 #include <seif/models/motion_model.hpp>
+#include <seif/models/velocity_model.hpp>
 
 #include <filesystem>
 #include <map>
@@ -49,6 +50,9 @@ struct DatasetInfo {
 struct DatasetOptions {
   int robot = 1;                        ///< MRCLAM: which robot's log
   std::map<std::string, double> noise;  ///< e.g. {"sigma_v", 0.05}
+  /// The form of a rate-driven motion model's noise (velocity_model.hpp); the format's
+  /// default when empty (simulated MRCLAM folders: per-step; recorded logs: rate).
+  std::optional<NoiseForm> noise_form;
 };
 
 class EventSource {
