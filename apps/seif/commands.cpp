@@ -1,6 +1,7 @@
 #include "commands.hpp"
 
 #include <seif/core/errors.hpp>
+#include <seif/core/version.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -20,7 +21,7 @@ int main(int argc, char** argv) {
       "Datasets use the UTIAS MRCLAM layout (see README). Exit status: 0 success, 1 usage\n"
       "error, 2 bad input data or a numerical failure (one line on stderr names the cause)."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "seif 0.1.0");
+  app.set_version_flag("--version", std::string("seif ") + kVersion);
   addSimulateCommand(app);
   addRunCommand(app);
   addBenchCommand(app);

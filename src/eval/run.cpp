@@ -1,6 +1,6 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
-#include <seif/models/velocity_motion.hpp>
+#include <seif/models/odometry_model.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -14,9 +14,50 @@ Pose2 startPose(const Dataset& data) {
   return interpolatePose(data.groundtruth, data.start_time);
 }
 
+namespace {
+
+/// One filter cycle of a run, timed and checked (the one place a run calls the filter).
+void runStep(SlamFilter& filter, const Step& step, std::size_t k, RunOutput& out) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  try {
+    filter.step(step.u, step.observations);
+  } catch (const std::exception& e) {
+    std::ostringstream msg;
+    msg << filter.name() << ": step " << k << " (t = " << std::fixed << step.time << "): " << e.what();
+    throw NumericError(msg.str());
+  }
+  const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
+  out.step_seconds.push_back(dt);
+  out.seconds += dt;
+  const Pose2 x = filter.pose();
+  if (!x.allFinite()) {
+    std::ostringstream msg;
+    msg << filter.name() << ": the pose estimate is not finite after step " << k;
+    throw NumericError(msg.str());
+  }
+  out.trajectory.push_back({step.time, x});
+  out.max_robot_links = std::max(out.max_robot_links, filter.robotLinks());
+  out.max_blocks_touched = std::max(out.max_blocks_touched, filter.blocksTouched());
+  ++out.steps;
+}
+
+void finish(const SlamFilter& filter, RunOutput& out) {
+  out.final_stats = filter.stats();
+  out.rejected_observations = filter.rejectedObservations();
+  out.max_robot_links = std::max(out.max_robot_links, out.final_stats.robot_links);
+}
+
+[[noreturn]] void backwards(const EventSource& source, double t, double now) {
+  std::ostringstream msg;
+  msg << "events go back in time (" << t << " after " << now << ")";
+  throw DataError(source.info().source, 0, msg.str());
+}
+
+}  // namespace
+
 RunOutput runFilter(SlamFilter& filter, const Dataset& data,
                     const std::function<void(std::size_t, std::size_t)>& progress) {
-  using Clock = std::chrono::steady_clock;
   RunOutput out;
   const std::size_t total = data.steps.size();
   out.trajectory.reserve(total + 1);
@@ -24,33 +65,116 @@ RunOutput runFilter(SlamFilter& filter, const Dataset& data,
   out.trajectory.push_back({data.start_time, filter.pose()});
   const std::size_t every = std::max<std::size_t>(1, total / 100);
   for (std::size_t k = 0; k < total; ++k) {
-    const Step& step = data.steps[k];
-    const auto t0 = Clock::now();
-    try {
-      filter.step(step.u, step.observations);
-    } catch (const std::exception& e) {
-      std::ostringstream msg;
-      msg << filter.name() << ": step " << k << " (t = " << std::fixed << step.time
-          << "): " << e.what();
-      throw NumericError(msg.str());
-    }
-    const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
-    out.step_seconds.push_back(dt);
-    out.seconds += dt;
-    const Pose2 x = filter.pose();
-    if (!x.allFinite()) {
-      std::ostringstream msg;
-      msg << filter.name() << ": the pose estimate is not finite after step " << k;
-      throw NumericError(msg.str());
-    }
-    out.trajectory.push_back({step.time, x});
-    out.max_robot_links = std::max(out.max_robot_links, filter.robotLinks());
-    out.max_blocks_touched = std::max(out.max_blocks_touched, filter.blocksTouched());
+    runStep(filter, data.steps[k], k, out);
     if (progress && (k % every == 0 || k + 1 == total)) progress(k + 1, total);
   }
-  out.final_stats = filter.stats();
-  out.rejected_observations = filter.rejectedObservations();
-  out.max_robot_links = std::max(out.max_robot_links, out.final_stats.robot_links);
+  finish(filter, out);
+  return out;
+}
+
+void StepAssembler::setRateStep(Step& step, double t) const {
+  step.time = t;
+  step.u = control_;
+  std::visit([&](auto& u) {
+    if constexpr (!std::is_same_v<std::decay_t<decltype(u)>, OdometryIncrement>) u.dt = t - now_;
+  }, step.u);
+}
+
+bool StepAssembler::next(EventSource& source, Step& step, std::vector<TimedPose>* groundtruth,
+                         std::vector<GpsFix>* gps) {
+  Event e;
+  while (source.next(e)) {
+    const double t = eventTime(e);
+    if (started_ && t < now_) backwards(source, t, now_);
+    if (auto* gt = std::get_if<TimedPose>(&e)) {
+      if (groundtruth) groundtruth->push_back(*gt);
+    } else if (auto* fix = std::get_if<GpsFix>(&e)) {
+      if (gps) gps->push_back(*fix);
+    } else if (auto* c = std::get_if<ControlEvent>(&e)) {
+      if (std::holds_alternative<OdometryIncrement>(c->input)) {
+        // An increment ends at its stamp; its observations may still follow.
+        std::optional<Step> done = std::move(pending_);
+        pending_ = Step{t, c->input, {}};
+        started_ = true;
+        now_ = t;
+        if (done) {
+          step = std::move(*done);
+          return true;
+        }
+        continue;
+      }
+      if (started_ && t > now_ && has_control_) {  // the previous control ends here
+        setRateStep(step, t);
+        step.observations.clear();
+        control_ = c->input;
+        now_ = t;
+        return true;
+      }
+      if (!started_) start_time_ = t;
+      started_ = true;
+      control_ = c->input;
+      has_control_ = true;
+      now_ = t;
+    } else {
+      auto& obs = std::get<ObservationEvent>(e);
+      if (pending_) {
+        if (pending_->time == t) {
+          for (Observation& z : obs.observations) pending_->observations.push_back(std::move(z));
+          continue;
+        }
+        step = std::move(*pending_);
+        pending_.reset();
+        // These observations are from the pose reached: a zero-motion step follows.
+        pending_ = Step{t, OdometryIncrement{Vec3::Zero(), Mat3::Zero()}, std::move(obs.observations)};
+        now_ = t;
+        return true;
+      }
+      if (!has_control_) {
+        if (dynamic_cast<const OdometryModel*>(source.info().motion.get()) == nullptr) {
+          dropped_before_first_control_ += obs.observations.size();
+          continue;
+        }
+        started_ = true;  // observations from the start pose of an odometry chain
+        step = Step{t, OdometryIncrement{Vec3::Zero(), Mat3::Zero()}, std::move(obs.observations)};
+        now_ = t;
+        return true;
+      }
+      setRateStep(step, t);
+      step.observations = std::move(obs.observations);
+      now_ = t;
+      return true;
+    }
+  }
+  if (pending_) {
+    step = std::move(*pending_);
+    pending_.reset();
+    return true;
+  }
+  return false;
+}
+
+RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function<void(double)>& progress) {
+  RunOutput out;
+  StepAssembler steps;
+  Step step;
+  const MotionModel& motion = *source.info().motion;
+  Pose2 dead_reckoning = filter.pose();
+  std::size_t k = 0;
+  while (steps.next(source, step, &out.groundtruth, &out.gps)) {
+    if (k == 0) {
+      out.trajectory.push_back({steps.startTime(), filter.pose()});
+      out.dead_reckoning.push_back(out.trajectory.back());
+    }
+    runStep(filter, step, k, out);
+    dead_reckoning = motion.apply(dead_reckoning, step.u);
+    out.dead_reckoning.push_back({step.time, dead_reckoning});
+    if (progress && k % 1024 == 0) progress(source.progress());
+    ++k;
+  }
+  if (progress) progress(1.0);
+  finish(filter, out);
+  out.dropped = source.dropped();
+  if (steps.droppedBeforeFirstControl() > 0) out.dropped["before_first_control"] += steps.droppedBeforeFirstControl();
   return out;
 }
 

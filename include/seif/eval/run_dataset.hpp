@@ -1,0 +1,63 @@
+#pragma once
+// `seif run` as one library call: open a dataset (any format), build the filter with the
+// dataset's models, stream the run, measure it and write its outputs:
+//   trajectory.tum  the filter's poses (TUM: t x y z qx qy qz qw)
+//   map.csv         id, x, y and the landmark's 2x2 marginal covariance
+//   metrics.json    timing, structure, errors (keys in docs/outputs.md and below)
+// Errors: ATE and map error against ground truth when the dataset has it (after the best
+// rigid 2-D alignment and as estimated); gps_rmse and dead_reckoning_gps_rmse against GPS
+// when the dataset has it (trajectory interpolated at the GPS stamps inside its span, after
+// the best rigid 2-D alignment, metres).
+#include <seif/eval/run.hpp>
+#include <seif/filters/seif_slam.hpp>
+#include <seif/io/event_source.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace seif {
+
+struct RunRequest {
+  std::filesystem::path dataset;
+  DatasetFormat format = DatasetFormat::Auto;
+  DatasetOptions dataset_options;
+  std::string filter = "seif";  ///< "ekf" | "eif" | "seif"
+  double outlier_gate = FilterConfig{}.outlier_gate;
+  SeifOptions seif;
+  std::string command_line;  ///< recorded in metrics.json
+};
+
+struct RunErrors {
+  std::optional<double> ate, dead_reckoning_ate, landmark;                  ///< aligned
+  std::optional<double> ate_unaligned, dead_reckoning_ate_unaligned, landmark_unaligned;
+  std::optional<double> gps, dead_reckoning_gps;                            ///< aligned
+  std::size_t gps_fixes = 0;  ///< fixes inside the trajectory's time span (those compared)
+};
+
+struct RunReport {
+  DatasetInfo info;
+  RunOutput output;
+  RunErrors errors;
+  std::size_t landmarks = 0;
+  double seconds_wall = 0.0;     ///< open, read and filter
+  double seconds_outputs = 0.0;  ///< trajectory, map with covariances, metrics
+};
+
+/// Runs `request` and writes the three files into `out` (which must exist and be writable).
+/// `progress(fraction)` is called during the run. Throws DataError for bad input,
+/// NumericError for a numerical failure, std::invalid_argument for a bad request.
+RunReport runDataset(const RunRequest& request, const std::filesystem::path& out,
+                     const std::function<void(double)>& progress = {});
+
+/// RMS distance between the trajectory, interpolated at each GPS stamp inside its span, and
+/// the fixes, after the best rigid 2-D alignment; nullopt without fixes in the span.
+/// `compared` receives the number of fixes used.
+std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const std::vector<GpsFix>& gps,
+                              std::size_t* compared = nullptr);
+
+/// The errors of a finished run (see the top of this file).
+RunErrors evaluateRun(const SlamFilter& filter, const DatasetInfo& info, const RunOutput& out);
+
+}  // namespace seif

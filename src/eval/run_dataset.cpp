@@ -1,0 +1,144 @@
+// `seif run` as one library call (include/seif/eval/run_dataset.hpp).
+#include <seif/core/errors.hpp>
+#include <seif/core/version.hpp>
+#include <seif/eval/run_dataset.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/io/atomic_file.hpp>
+#include <seif/io/results.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace seif {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+nlohmann::json optionalJson(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
+
+nlohmann::json seifOptionsJson(const SeifOptions& o) {
+  return {{"active", o.max_active},
+          {"relax", o.relax},
+          {"mean", o.mean == SeifOptions::Mean::Exact ? "exact" : "amortized"},
+          {"deactivate", o.deactivate == SeifOptions::Deactivate::Oldest ? "oldest" : "weakest"},
+          {"recovery", o.recovery == SeifOptions::Recovery::BeforeMeasurement ? "before-update" : "after-update"},
+          {"relax_order", o.relax_order == SeifOptions::RelaxOrder::Cyclic ? "cyclic" : "random"},
+          {"seed", o.seed}};
+}
+
+std::string metricsJson(const RunRequest& request, const RunReport& r) {
+  const RunOutput& out = r.output;
+  std::vector<double> sorted = out.step_seconds;
+  std::sort(sorted.begin(), sorted.end());
+  nlohmann::json noise = nlohmann::json::array();
+  for (const NoiseSetting& n : r.info.noise) {
+    noise.push_back({{"name", n.name}, {"value", n.value}, {"unit", n.unit}, {"source", n.source}});
+  }
+  nlohmann::json dropped = nlohmann::json::object();
+  for (const auto& [reason, count] : out.dropped) dropped[reason] = count;
+  const double steps = static_cast<double>(out.steps);
+  nlohmann::json j = {
+      {"version", kVersion},
+      {"command_line", request.command_line},
+      {"dataset", request.dataset.string()},
+      {"format", r.info.format},
+      {"filter", request.filter},
+      {"motion_model", r.info.motion->describe()},
+      {"sensor_model", r.info.sensor->describe()},
+      {"noise", noise},
+      {"start_pose", {r.info.start_pose.x(), r.info.start_pose.y(), r.info.start_pose.z()}},
+      {"start_pose_source", r.info.start_pose_source},
+      {"steps", out.steps},
+      {"landmarks", r.landmarks},
+      {"seconds", out.seconds},
+      {"seconds_wall", r.seconds_wall},
+      {"seconds_trajectory_and_map", r.seconds_outputs},
+      {"us_per_step", out.steps == 0 ? 0.0 : 1e6 * out.seconds / steps},
+      {"us_per_step_median", sorted.empty() ? 0.0 : 1e6 * sorted[sorted.size() / 2]},
+      {"links", out.final_stats.links},
+      {"robot_links", out.final_stats.robot_links},
+      {"max_robot_links", out.max_robot_links},
+      {"max_landmark_links", out.final_stats.max_landmark_links},
+      {"max_blocks_touched", out.max_blocks_touched},
+      {"rejected_observations", out.rejected_observations},
+      {"outlier_gate_sigmas", std::isinf(request.outlier_gate) ? nlohmann::json(nullptr) : nlohmann::json(request.outlier_gate)},
+      {"landmark_rmse", optionalJson(r.errors.landmark)},
+      {"ate_rmse", optionalJson(r.errors.ate)},
+      {"dead_reckoning_ate_rmse", optionalJson(r.errors.dead_reckoning_ate)},
+      {"landmark_rmse_unaligned", optionalJson(r.errors.landmark_unaligned)},
+      {"ate_rmse_unaligned", optionalJson(r.errors.ate_unaligned)},
+      {"dead_reckoning_ate_rmse_unaligned", optionalJson(r.errors.dead_reckoning_ate_unaligned)},
+      {"gps_rmse", optionalJson(r.errors.gps)},
+      {"dead_reckoning_gps_rmse", optionalJson(r.errors.dead_reckoning_gps)},
+      {"gps_fixes", r.errors.gps_fixes},
+      {"errors", "*_rmse: after the best rigid 2-D alignment to the reference (ground truth or GPS, "
+                 "at its stamps); *_unaligned: as estimated, in the ground truth's frame"},
+      {"dropped", dropped},
+  };
+  if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
+  if (request.filter == "seif") j["seif"] = seifOptionsJson(request.seif);
+  return j.dump(2) + "\n";
+}
+
+}  // namespace
+
+std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const std::vector<GpsFix>& gps,
+                              std::size_t* compared) {
+  if (compared) *compared = 0;
+  if (trajectory.empty()) return std::nullopt;
+  const double t0 = trajectory.front().time, t1 = trajectory.back().time;
+  std::vector<Vec2> est, ref;
+  for (const GpsFix& g : gps) {
+    if (g.time < t0 || g.time > t1) continue;
+    est.push_back(interpolatePose(trajectory, g.time).head<2>());
+    ref.push_back(g.position);
+  }
+  if (compared) *compared = est.size();
+  if (est.size() < 2) return std::nullopt;
+  return alignedRmse(est, ref, Alignment::Rigid);
+}
+
+RunErrors evaluateRun(const SlamFilter& filter, const DatasetInfo& info, const RunOutput& out) {
+  RunErrors e;
+  e.ate = ateRmse(out.trajectory, out.groundtruth, Alignment::Rigid);
+  e.dead_reckoning_ate = ateRmse(out.dead_reckoning, out.groundtruth, Alignment::Rigid);
+  e.landmark = landmarkRmse(filter, info.landmarks, Alignment::Rigid);
+  e.ate_unaligned = ateRmse(out.trajectory, out.groundtruth);
+  e.dead_reckoning_ate_unaligned = ateRmse(out.dead_reckoning, out.groundtruth);
+  e.landmark_unaligned = landmarkRmse(filter, info.landmarks);
+  e.gps = gpsRmse(out.trajectory, out.gps, &e.gps_fixes);
+  e.dead_reckoning_gps = gpsRmse(out.dead_reckoning, out.gps);
+  return e;
+}
+
+RunReport runDataset(const RunRequest& request, const std::filesystem::path& out,
+                     const std::function<void(double)>& progress) {
+  const auto start = Clock::now();
+  std::unique_ptr<EventSource> source = openDataset(request.dataset, request.format, request.dataset_options);
+  RunReport report;
+  FilterConfig config;
+  config.motion = source->info().motion;
+  config.sensor = source->info().sensor;
+  config.outlier_gate = request.outlier_gate;
+  auto filter = makeFilter(request.filter, source->info().start_pose, config, request.seif);
+  report.output = runFilter(*filter, *source, progress);
+  report.info = source->info();
+  source.reset();
+  if (report.output.steps == 0) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
+  report.seconds_wall = secondsSince(start);
+  report.landmarks = filter->landmarkIds().size();
+  report.errors = evaluateRun(*filter, report.info, report.output);
+
+  const auto write_start = Clock::now();
+  writeTum(out / "trajectory.tum", report.output.trajectory);
+  writeMapCsv(out / "map.csv", *filter);  // the marginal covariances are computed here
+  report.seconds_outputs = secondsSince(write_start);
+  writeFileAtomically(out / "metrics.json", metricsJson(request, report));
+  return report;
+}
+
+}  // namespace seif

@@ -1,0 +1,66 @@
+// Format names and the noise rule shared by the readers (include/seif/io/event_source.hpp).
+#include <seif/io/event_source.hpp>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace seif {
+namespace {
+constexpr std::pair<DatasetFormat, std::string_view> kFormats[] = {
+    {DatasetFormat::Auto, "auto"},
+    {DatasetFormat::Mrclam, "mrclam"},
+    {DatasetFormat::VictoriaPark, "victoria-park"},
+    {DatasetFormat::Isam, "isam"},
+    {DatasetFormat::G2o, "g2o"}};
+}  // namespace
+
+DatasetFormat parseDatasetFormat(std::string_view name) {
+  for (const auto& [format, n] : kFormats) {
+    if (n == name) return format;
+  }
+  throw std::invalid_argument("unknown dataset format '" + std::string(name) +
+                              "' (expected auto, mrclam, victoria-park, isam or g2o)");
+}
+
+std::string_view datasetFormatName(DatasetFormat format) {
+  for (const auto& [f, n] : kFormats) {
+    if (f == format) return n;
+  }
+  return "?";
+}
+
+void checkNoiseNames(const DatasetOptions& options, const std::vector<std::string>& known, std::string_view format) {
+  for (const auto& [name, value] : options.noise) {
+    bool found = false;
+    for (const std::string& k : known) found = found || k == name;
+    if (found) continue;
+    std::string list;
+    for (const std::string& k : known) list.append(list.empty() ? "" : ", ").append(k);
+    throw std::invalid_argument("the " + std::string(format) + " format has no noise value '" + name + "'" +
+                                (known.empty() ? std::string(" (its noise comes from the file)")
+                                               : " (it takes " + list + ")"));
+  }
+}
+
+double resolveNoise(DatasetInfo& info, const DatasetOptions& options, const std::string& name,
+                    const std::string& unit, std::optional<double> from_file, const std::string& file_source,
+                    double default_value) {
+  NoiseSetting s{name, default_value, unit, "default for " + info.format};
+  if (const auto it = options.noise.find(name); it != options.noise.end()) {
+    s.value = it->second;
+    s.source = "command line";
+  } else if (from_file) {
+    s.value = *from_file;
+    s.source = file_source;
+  }
+  if (!std::isfinite(s.value) || !(s.value > 0.0)) {
+    std::ostringstream msg;
+    msg << name << " must be finite and > 0, found " << s.value << " (" << s.source << ")";
+    throw std::invalid_argument(msg.str());
+  }
+  info.noise.push_back(s);
+  return s.value;
+}
+
+}  // namespace seif

@@ -1,0 +1,138 @@
+// The streamed run loop: StepAssembler turns any event stream into the steps buildDataset()
+// makes from a log in memory, and a streamed run equals the in-memory one.
+#include <seif/core/errors.hpp>
+#include <seif/eval/run.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/io/robot_log_source.hpp>
+#include <seif/models/odometry_model.hpp>
+#include <seif/models/range_bearing.hpp>
+#include <seif/sim/world.hpp>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+using namespace seif;
+
+std::vector<Step> assemble(EventSource& source, std::vector<TimedPose>* gt = nullptr) {
+  StepAssembler a;
+  std::vector<Step> steps;
+  Step s;
+  while (a.next(source, s, gt, nullptr)) steps.push_back(s);
+  return steps;
+}
+
+void expectSameSteps(const std::vector<Step>& a, const std::vector<Step>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    const auto& ua = std::get<VelocityControl>(a[k].u);
+    const auto& ub = std::get<VelocityControl>(b[k].u);
+    ASSERT_EQ(a[k].time, b[k].time) << "step " << k;
+    ASSERT_EQ(ua.v, ub.v) << "step " << k;
+    ASSERT_EQ(ua.w, ub.w) << "step " << k;
+    ASSERT_EQ(ua.dt, ub.dt) << "step " << k;
+    ASSERT_EQ(a[k].observations.size(), b[k].observations.size()) << "step " << k;
+    for (std::size_t i = 0; i < a[k].observations.size(); ++i) {
+      ASSERT_EQ(a[k].observations[i].landmark, b[k].observations[i].landmark);
+      ASSERT_EQ(a[k].observations[i].z, b[k].observations[i].z);
+    }
+  }
+}
+
+TEST(StepAssembler, MakesTheStepsOfBuildDatasetOnEveryPreset) {
+  for (const WorldPreset preset : {WorldPreset::Paper, WorldPreset::Uniform, WorldPreset::Corridor}) {
+    const RobotLog log = simulate(presetConfig(preset, 0, 0, 3));
+    RobotLogSource source(log, NoiseModel{});
+    std::vector<TimedPose> gt;
+    const std::vector<Step> steps = assemble(source, &gt);
+    expectSameSteps(steps, buildDataset(log).steps);
+    EXPECT_EQ(gt.size(), log.groundtruth.size());
+  }
+}
+
+TEST(StepAssembler, SplitsAControlIntervalAtObservationStampsAndDropsEarlyOnes) {
+  RobotLog log;
+  log.odometry = {{10.0, 1.0, 0.1}, {11.0, 2.0, 0.2}, {12.0, 3.0, 0.3}};
+  log.measurements = {{9.0, 7, 1.0, 0.0}, {10.5, 7, 2.0, 0.1}, {10.5, 8, 2.5, -0.2}, {11.0, 7, 3.0, 0.0},
+                      {12.5, 8, 1.0, 0.0}};
+  RobotLogSource source(log, NoiseModel{});
+  StepAssembler a;
+  std::vector<Step> steps;
+  Step s;
+  while (a.next(source, s, nullptr, nullptr)) steps.push_back(s);
+  expectSameSteps(steps, buildDataset(log).steps);
+  EXPECT_EQ(a.droppedBeforeFirstControl(), 1u);
+  EXPECT_EQ(a.startTime(), 10.0);
+}
+
+/// A hand-made stream of events.
+class ListSource final : public EventSource {
+ public:
+  ListSource(std::vector<Event> events, std::shared_ptr<const MotionModel> motion) : events_(std::move(events)) {
+    info_.source = "list";
+    info_.motion = std::move(motion);
+    info_.sensor = std::make_shared<RangeBearingModel>(0.1, 0.01);
+  }
+  const DatasetInfo& info() const override { return info_; }
+  bool next(Event& e) override {
+    if (i_ == events_.size()) return false;
+    e = events_[i_++];
+    return true;
+  }
+  double progress() const override { return 0.0; }
+
+ private:
+  std::vector<Event> events_;
+  std::size_t i_ = 0;
+  DatasetInfo info_;
+};
+
+TEST(StepAssembler, OdometryIncrementsTakeTheObservationsOfThePoseTheyReach) {
+  const OdometryIncrement d1{Vec3(1, 0, 0), Mat3::Identity()}, d2{Vec3(0, 1, 0), Mat3::Identity()};
+  const Observation z0{5, Vec2(1, 0), std::nullopt}, z1{6, Vec2(2, 0), std::nullopt};
+  ListSource source({ObservationEvent{0.0, {z0}}, ControlEvent{1.0, d1}, ObservationEvent{1.0, {z1}},
+                     ControlEvent{2.0, d2}, ObservationEvent{2.0, {z0, z1}}, ControlEvent{3.0, d1}},
+                    std::make_shared<OdometryModel>());
+  const std::vector<Step> steps = assemble(source);
+  ASSERT_EQ(steps.size(), 4u);
+  EXPECT_EQ(std::get<OdometryIncrement>(steps[0].u).delta, Vec3::Zero());  // from the start pose
+  EXPECT_EQ(steps[0].observations.size(), 1u);
+  EXPECT_EQ(steps[1].time, 1.0);
+  EXPECT_EQ(std::get<OdometryIncrement>(steps[1].u).delta, d1.delta);
+  ASSERT_EQ(steps[1].observations.size(), 1u);
+  EXPECT_EQ(steps[1].observations[0].landmark, 6);
+  EXPECT_EQ(steps[2].observations.size(), 2u);
+  EXPECT_EQ(steps[3].time, 3.0);
+  EXPECT_TRUE(steps[3].observations.empty());
+}
+
+TEST(StepAssembler, EventsGoingBackInTimeAreADataError) {
+  ListSource source({ControlEvent{2.0, VelocityControl{1, 0, 0}}, ControlEvent{1.0, VelocityControl{1, 0, 0}}},
+                    std::make_shared<VelocityModel>(0.1, 0.1, NoiseForm::Rate));
+  EXPECT_THROW(assemble(source), DataError);
+}
+
+TEST(RunStream, EqualsTheInMemoryRunForEveryFilter) {
+  const RobotLog log = simulate(presetConfig(WorldPreset::Paper, 0, 0, 5));
+  const Dataset data = buildDataset(log);
+  for (const char* name : {"ekf", "eif", "seif"}) {
+    RobotLogSource source(log, NoiseModel{});
+    FilterConfig config;
+    config.motion = source.info().motion;
+    config.sensor = source.info().sensor;
+    auto streamed = makeFilter(name, source.info().start_pose, config);
+    const RunOutput a = runFilter(*streamed, source);
+    auto in_memory = makeFilter(name, startPose(data), FilterConfig{});
+    const RunOutput b = runFilter(*in_memory, data);
+    ASSERT_EQ(a.trajectory.size(), b.trajectory.size()) << name;
+    for (std::size_t k = 0; k < a.trajectory.size(); ++k) {
+      ASSERT_EQ(a.trajectory[k].time, b.trajectory[k].time) << name << " step " << k;
+      ASSERT_EQ(a.trajectory[k].pose, b.trajectory[k].pose) << name << " step " << k;
+    }
+    EXPECT_EQ(a.dead_reckoning.size(), a.trajectory.size());
+    const auto dr = deadReckoning(data, startPose(data), streamed->motionModel());
+    EXPECT_EQ(a.dead_reckoning.back().pose, dr.back().pose) << name;
+  }
+}
+
+}  // namespace
