@@ -325,23 +325,27 @@ TEST(Cli, IntegerFlagsAreDecimal) {
   std::filesystem::remove_all(dir);
 }
 
-// The same rule inside NoiseFlags::resolve, for the final values whichever their source: a
-// bad flag value is a usage error, a bad dataset value (meta.json) is bad data.
-TEST(Cli, NoiseFlagsResolveRequiresFinitePositiveSigmas) {
-  seif::NoiseModel zero_v = seif::cli::mrclamDefaultNoise();
-  zero_v.sigma_v = 0.0;  // zero control noise: refused too
-  seif::cli::NoiseFlags flags;
-  EXPECT_THROW(flags.resolve(zero_v), seif::ModelError);
-  flags.sigma_v = 0.01;  // a valid flag overrides it
-  EXPECT_EQ(flags.resolve(zero_v).sigma_v, 0.01);
-  flags.sigma_w = std::nan("");
+// The same rule for the final noise values whichever their source (resolveNoise): the
+// command line wins over the file, the file over the format's default, and a value that is
+// not finite and > 0 is refused naming its source.
+TEST(Cli, NoiseValuesResolveRequiresFinitePositiveSigmas) {
+  seif::DatasetInfo info;
+  info.format = "mrclam";
+  seif::DatasetOptions options;
+  EXPECT_EQ(seif::resolveNoise(info, options, "sigma_v", "m/s", 0.2, "meta.json", 0.05), 0.2);
+  EXPECT_EQ(info.noise.back().source, "meta.json");
+  EXPECT_EQ(seif::resolveNoise(info, options, "sigma_w", "rad/s", std::nullopt, "meta.json", 0.3), 0.3);
+  EXPECT_EQ(info.noise.back().source, "default for mrclam");
+  options.noise["sigma_v"] = 0.01;
+  EXPECT_EQ(seif::resolveNoise(info, options, "sigma_v", "m/s", 0.2, "meta.json", 0.05), 0.01);
+  EXPECT_EQ(info.noise.back().source, "command line");
   try {
-    flags.resolve(std::nullopt);
-    ADD_FAILURE() << "a nan --sigma-w was accepted";
-  } catch (const seif::ModelError& e) {
-    ADD_FAILURE() << "a flag's value is not bad data: " << e.what();
+    seif::resolveNoise(info, {}, "sigma_v", "m/s", 0.0, "meta.json", 0.05);
+    ADD_FAILURE() << "a zero sigma was accepted";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("--sigma-w: must be finite and > 0, found nan"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("sigma_v must be finite and > 0, found 0 (meta.json)"), std::string::npos)
         << e.what();
   }
+  options.noise["sigma_nope"] = 1.0;
+  EXPECT_THROW(seif::checkNoiseNames(options, {"sigma_v"}, "mrclam"), std::invalid_argument);
 }

@@ -1,129 +1,80 @@
-// seif run: one filter over one dataset; writes trajectory.tum, map.csv, metrics.json.
+// seif run: one filter over one dataset of any format (flags -> RunRequest -> runDataset).
 #include "commands.hpp"
 #include "options.hpp"
 
-#include <seif/core/errors.hpp>
-#include <seif/eval/run.hpp>
-#include <seif/io/mrclam.hpp>
-#include <seif/io/results.hpp>
+#include <seif/eval/run_dataset.hpp>
 
-#include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 
 namespace seif::cli {
 namespace {
 
 struct RunArgs {
   std::string dataset;
+  std::string format = "auto";
   int robot = 1;
   std::string filter = "seif";
   std::string out = "out/run";
   NoiseFlags noise;
   SeifFlags seif;
   double outlier_gate = FilterConfig{}.outlier_gate;
+  std::string command_line;
 };
 
-nlohmann::json optionalJson(const std::optional<double>& v) {
-  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+std::string metres(const std::optional<double>& v) {
+  if (!v) return "n/a";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4f", *v);
+  return buf;
 }
 
 void run(const RunArgs& args) {
   requireOutputFolder(args.out);  // before any work: a bad --out fails at once
-  using Clock = std::chrono::steady_clock;
-  const auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
-  const auto read_start = Clock::now();
-  const RobotLog log = readMrclam(args.dataset, args.robot);
-  const Dataset data = buildDataset(log);
-  if (data.steps.empty()) {
-    throw DataError(args.dataset, 0, "robot " + std::to_string(args.robot) + " has no odometry to run");
-  }
-  const double read_seconds = seconds_since(read_start);
-  FilterConfig config;
-  config.noise = args.noise.resolve(data.noise);
-  config.outlier_gate = args.outlier_gate;
-  const SeifOptions seif_options = args.seif.resolve();
-  const Pose2 start = startPose(data);
-  auto filter = makeFilter(args.filter, start, config, seif_options);
-
-  RunOutput out;
+  RunRequest request;
+  request.dataset = args.dataset;
+  request.format = parseDatasetFormat(args.format);
+  request.dataset_options = args.noise.resolve();
+  request.dataset_options.robot = args.robot;
+  request.filter = args.filter;
+  request.outlier_gate = args.outlier_gate;
+  request.seif = args.seif.resolve();
+  request.command_line = args.command_line;
+  RunReport r;
   {
     Progress progress("seif run " + args.filter);
-    out = runFilter(*filter, data, std::ref(progress));
+    r = runDataset(request, args.out, [&](double f) { progress(f); });
   }
-  const auto dr = deadReckoning(data, start, filter->motionModel());
-  // ATE and map errors after the best rigid alignment (as the TUM benchmark and evo define
-  // ATE), and in the ground truth's frame as they are (the filter starts at the true pose).
-  const auto ate = ateRmse(out.trajectory, data.groundtruth, Alignment::Rigid);
-  const auto dr_ate = ateRmse(dr, data.groundtruth, Alignment::Rigid);
-  const auto map_rmse = landmarkRmse(*filter, data.landmarks, Alignment::Rigid);
-  const auto ate_raw = ateRmse(out.trajectory, data.groundtruth);
-  const auto dr_ate_raw = ateRmse(dr, data.groundtruth);
-  const auto map_rmse_raw = landmarkRmse(*filter, data.landmarks);
-
-  const std::filesystem::path dir(args.out);
-  std::filesystem::create_directories(dir);
-  const auto write_start = Clock::now();
-  writeTum(dir / "trajectory.tum", out.trajectory);
-  writeMapCsv(dir / "map.csv", *filter);  // the marginal covariances are computed here
-  const double write_seconds = seconds_since(write_start);
-  std::vector<double> sorted = out.step_seconds;
-  std::sort(sorted.begin(), sorted.end());
-  const double median_us = sorted.empty() ? 0.0 : 1e6 * sorted[sorted.size() / 2];
-  nlohmann::json metrics = {
-      {"dataset", args.dataset},
-      {"robot", args.robot},
-      {"filter", args.filter},
-      {"noise", toJson(config.noise)},
-      {"steps", data.steps.size()},
-      {"landmarks", filter->landmarkIds().size()},
-      {"seconds", out.seconds},
-      {"seconds_read", read_seconds},
-      {"seconds_trajectory_and_map", write_seconds},
-      {"us_per_step", data.steps.empty() ? 0.0 : 1e6 * out.seconds / static_cast<double>(data.steps.size())},
-      {"us_per_step_median", median_us},
-      {"links", out.final_stats.links},
-      {"robot_links", out.final_stats.robot_links},
-      {"max_robot_links", out.max_robot_links},
-      {"max_landmark_links", out.final_stats.max_landmark_links},
-      {"max_blocks_touched", out.max_blocks_touched},
-      {"rejected_observations", out.rejected_observations},
-      {"outlier_gate_sigmas", std::isinf(config.outlier_gate) ? nlohmann::json(nullptr) : nlohmann::json(config.outlier_gate)},
-      {"landmark_rmse", optionalJson(map_rmse)},
-      {"ate_rmse", optionalJson(ate)},
-      {"dead_reckoning_ate_rmse", optionalJson(dr_ate)},
-      {"landmark_rmse_unaligned", optionalJson(map_rmse_raw)},
-      {"ate_rmse_unaligned", optionalJson(ate_raw)},
-      {"dead_reckoning_ate_rmse_unaligned", optionalJson(dr_ate_raw)},
-      {"errors", "*_rmse: after the best rigid 2-D alignment to ground truth; *_unaligned: as estimated, "
-                 "in the ground truth's frame (the filter starts at the true pose)"},
-      {"dropped", {{"robot_measurements", log.dropped.robot_measurements},
-                   {"unknown_barcodes", log.dropped.unknown_barcodes},
-                   {"before_first_control", data.dropped.before_first_control}}},
-  };
-  if (args.filter == "seif") metrics["seif"] = toJson(seif_options);
-  writeJson((dir / "metrics.json").string(), metrics);
-
-  auto fmt = [](const std::optional<double>& v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.4f", v.value_or(std::nan("")));
-    return v ? std::string(buf) : std::string("n/a");
-  };
-  std::printf("%s on %s (robot %d): %zu steps, %zu landmarks, %.1f us/step\n", args.filter.c_str(),
-              args.dataset.c_str(), args.robot, data.steps.size(), filter->landmarkIds().size(),
-              metrics["us_per_step"].get<double>());
-  std::printf("  aligned:   landmark RMSE %s m | ATE %s m | dead-reckoning ATE %s m\n",
-              fmt(map_rmse).c_str(), fmt(ate).c_str(), fmt(dr_ate).c_str());
-  std::printf("  unaligned: landmark RMSE %s m | ATE %s m | dead-reckoning ATE %s m | links %zu\n",
-              fmt(map_rmse_raw).c_str(), fmt(ate_raw).c_str(), fmt(dr_ate_raw).c_str(),
-              out.final_stats.links);
-  std::printf("  time: read %.2f s | filter %.2f s | trajectory and map with covariances %.2f s\n",
-              read_seconds, out.seconds, write_seconds);
+  const RunOutput& out = r.output;
+  std::printf("%s on %s (%s): %zu steps, %zu landmarks, %.1f us/step\n", args.filter.c_str(),
+              args.dataset.c_str(), r.info.format.c_str(), out.steps, r.landmarks,
+              out.steps == 0 ? 0.0 : 1e6 * out.seconds / static_cast<double>(out.steps));
+  std::printf("  motion: %s\n  sensor: %s\n", r.info.motion->describe().c_str(), r.info.sensor->describe().c_str());
+  for (const NoiseSetting& n : r.info.noise) {
+    std::printf("  noise %-15s %-10g %-14s (%s)\n", n.name.c_str(), n.value, n.unit.c_str(), n.source.c_str());
+  }
+  std::printf("  start pose (%.3f, %.3f, %.3f): %s\n", r.info.start_pose.x(), r.info.start_pose.y(),
+              r.info.start_pose.z(), r.info.start_pose_source.c_str());
+  const RunErrors& e = r.errors;
+  if (r.info.has_groundtruth || !r.info.landmarks.empty()) {
+    std::printf("  aligned:   landmark RMSE %s m | ATE %s m | dead-reckoning ATE %s m\n",
+                metres(e.landmark).c_str(), metres(e.ate).c_str(), metres(e.dead_reckoning_ate).c_str());
+    std::printf("  unaligned: landmark RMSE %s m | ATE %s m | dead-reckoning ATE %s m | links %zu\n",
+                metres(e.landmark_unaligned).c_str(), metres(e.ate_unaligned).c_str(),
+                metres(e.dead_reckoning_ate_unaligned).c_str(), out.final_stats.links);
+  }
+  if (r.info.has_gps) {
+    std::printf("  GPS (%zu fixes, aligned): trajectory RMSE %s m | dead reckoning %s m\n", e.gps_fixes,
+                metres(e.gps).c_str(), metres(e.dead_reckoning_gps).c_str());
+  }
+  std::printf("  time: filter %.2f s | read and filter %.2f s | trajectory and map with covariances %.2f s\n",
+              out.seconds, r.seconds_wall, r.seconds_outputs);
+  for (const auto& [reason, count] : out.dropped) {
+    if (count > 0) std::printf("  dropped %zu records: %s\n", count, reason.c_str());
+  }
   if (out.rejected_observations > 0) {
     std::printf("  rejected %zu gross outlier observation%s (beyond %g sigma of the measurement noise)\n",
-                out.rejected_observations, out.rejected_observations == 1 ? "" : "s", config.outlier_gate);
+                out.rejected_observations, out.rejected_observations == 1 ? "" : "s", args.outlier_gate);
   }
   std::printf("  wrote %s/{trajectory.tum,map.csv,metrics.json}\n", args.out.c_str());
 }
@@ -134,15 +85,21 @@ void addRunCommand(CLI::App& app) {
   auto args = std::make_shared<RunArgs>();
   CLI::App* cmd = app.add_subcommand(
       "run",
-      "Run a SLAM filter over a dataset in the MRCLAM layout (real or from `seif simulate`).\n"
+      "Run a SLAM filter over a dataset: an MRCLAM folder (real, or from `seif simulate`), a\n"
+      "Victoria Park folder, an iSAM/GTSAM text file or a g2o 2-D file (--format auto tells\n"
+      "them apart). The data are streamed: memory is the filter's, not the log's.\n"
       "Writes OUT/trajectory.tum (TUM: t x y z qx qy qz qw), OUT/map.csv (id,x,y and the 2x2\n"
-      "covariance) and OUT/metrics.json (timing, links, landmark RMSE, ATE and dead-reckoning\n"
-      "ATE against ground truth when the dataset has it, else null). Noise defaults come\n"
-      "from the dataset's meta.json, else the MRCLAM values documented in the README.");
-  cmd->add_option("--dataset", args->dataset, "dataset folder (MRCLAM layout)")
+      "covariance) and OUT/metrics.json (models and noise with their sources, timing, links,\n"
+      "landmark RMSE and ATE against ground truth, GPS RMSE against GPS fixes, each when the\n"
+      "dataset has it, else null). Noise: a --sigma-* flag, else the file's, else the format's\n"
+      "documented default; the console lists every value and where it came from.");
+  cmd->add_option("--dataset", args->dataset, "dataset folder or file")
       ->required()
-      ->check(CLI::ExistingDirectory);
-  cmd->add_option("--robot", args->robot, "robot number in the dataset")
+      ->check(CLI::ExistingPath);
+  cmd->add_option("--format", args->format, "auto, mrclam, victoria-park, isam or g2o")
+      ->check(CLI::IsMember({"auto", "mrclam", "victoria-park", "isam", "g2o"}))
+      ->capture_default_str();
+  cmd->add_option("--robot", args->robot, "MRCLAM: robot number in the dataset")
       ->transform(integerIn(1, 5))
       ->capture_default_str();
   cmd->add_option("--filter", args->filter, "ekf (dense covariance), eif (dense information) or seif")
@@ -161,7 +118,10 @@ void addRunCommand(CLI::App& app) {
       ->capture_default_str();
   args->noise.add(*cmd);
   args->seif.add(*cmd);
-  cmd->callback([args] { run(*args); });
+  cmd->callback([args] {
+    args->command_line = commandLine();
+    run(*args);
+  });
 }
 
 }  // namespace seif::cli

@@ -9,7 +9,15 @@
 
 namespace seif::cli {
 
+namespace {
+std::string g_command_line;
+}  // namespace
+
+const std::string& commandLine() { return g_command_line; }
+
 int main(int argc, char** argv) {
+  g_command_line.clear();
+  for (int i = 0; i < argc; ++i) g_command_line.append(i == 0 ? "seif" : " ").append(i == 0 ? "" : argv[i]);
   CLI::App app{
       "seif - SLAM with Sparse Extended Information Filters (Thrun et al. 2002).\n\n"
       "Typical use:\n"

@@ -9,6 +9,9 @@ namespace seif::cli {
 /// 0 success, 1 usage error, 2 bad input data or a numerical failure.
 int main(int argc, char** argv);
 
+/// The command line main() was called with, arguments joined by spaces.
+const std::string& commandLine();
+
 void addSimulateCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 
 #include <charconv>
@@ -40,12 +41,6 @@ std::optional<T> parseAll(const std::string& text) {
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
   if (ec != std::errc() || end != s.data() + s.size()) return std::nullopt;
   return value;
-}
-
-std::string number(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
 }
 
 }  // namespace
@@ -91,52 +86,34 @@ void requireOutputFolder(const std::string& out) {
   requireWritableDirectory(out);
 }
 
-NoiseModel mrclamDefaultNoise() {
-  NoiseModel n;
-  // Measured on dataset 6 against Vicon: 1-s means of the velocity commands differ from the
-  // true velocities by 0.013 m/s and 0.038 rad/s (white per-step noise at ~67 Hz: sigma *
-  // sqrt(0.015 s)); range residuals have a robust sd of 0.08-0.18 m with a heavy tail,
-  // bearing residuals 0.006-0.012 rad. The values below were then chosen among a small grid
-  // by the EKF's errors over the five robots (README, "MRCLAM").
-  n.sigma_v = 0.05;
-  n.sigma_w = 0.2;
-  n.sigma_range = 0.2;
-  n.sigma_bearing = 0.03;
-  return n;
-}
-
 void NoiseFlags::add(CLI::App& cmd) {
   const CLI::Validator positive = positiveFinite();
-  cmd.add_option("--sigma-v", sigma_v, "forward-velocity noise std [m/s]")->check(positive);
-  cmd.add_option("--sigma-w", sigma_w, "rotational-velocity noise std [rad/s]")->check(positive);
-  cmd.add_option("--sigma-range", sigma_range, "range noise std [m]")->check(positive);
-  cmd.add_option("--sigma-bearing", sigma_bearing, "bearing noise std [rad]")->check(positive);
-}
-
-NoiseModel NoiseFlags::resolve(const std::optional<NoiseModel>& dataset_noise) const {
-  NoiseModel n = dataset_noise.value_or(mrclamDefaultNoise());
-  if (sigma_v) n.sigma_v = *sigma_v;
-  if (sigma_w) n.sigma_w = *sigma_w;
-  if (sigma_range) n.sigma_range = *sigma_range;
-  if (sigma_bearing) n.sigma_bearing = *sigma_bearing;
-  // The flags were checked as they were parsed; this covers the final values, whichever
-  // their source (a flag set in code, the dataset's meta.json).
   const struct {
     const char* flag;
-    const char* key;
-    const std::optional<double>& given;
-    double value;
-  } sigmas[] = {{"--sigma-v", "sigma_v", sigma_v, n.sigma_v},
-                {"--sigma-w", "sigma_w", sigma_w, n.sigma_w},
-                {"--sigma-range", "sigma_range", sigma_range, n.sigma_range},
-                {"--sigma-bearing", "sigma_bearing", sigma_bearing, n.sigma_bearing}};
-  for (const auto& s : sigmas) {
-    if (isPositiveFinite(s.value)) continue;
-    const std::string rule = " must be finite and > 0, found " + number(s.value);
-    if (s.given) throw std::invalid_argument(std::string(s.flag) + ":" + rule);
-    throw ModelError(std::string("the dataset's noise ") + s.key + " (meta.json)" + rule);
+    const char* name;
+    const char* help;
+  } flags[] = {
+      {"--sigma-v", "sigma_v", "velocity model: forward-velocity noise [m/s, or m/s/sqrt(s) as a rate]"},
+      {"--sigma-w", "sigma_w", "velocity model: rotational-velocity noise [rad/s, or rad/s/sqrt(s) as a rate]"},
+      {"--sigma-speed", "sigma_speed", "Ackermann model: encoder speed noise [m/s, or m/s/sqrt(s) as a rate]"},
+      {"--sigma-steering", "sigma_steering", "Ackermann model: steering noise [rad, or rad*sqrt(s) as a rate]"},
+      {"--sigma-range", "sigma_range", "range-bearing sensor: range noise [m]"},
+      {"--sigma-bearing", "sigma_bearing", "range-bearing sensor: bearing noise [rad]"}};
+  for (const auto& f : flags) cmd.add_option(f.flag, sigmas[f.name], f.help)->check(positive);
+  cmd.add_option("--noise-form", form,
+                 "per-step (the paper's: the control noise is the same for every step) or rate "
+                 "(a noise density: the injected noise grows with the step's duration); default: "
+                 "the format's (simulated folders per-step, recorded logs rate)")
+      ->check(CLI::IsMember({"per-step", "rate"}));
+}
+
+DatasetOptions NoiseFlags::resolve() const {
+  DatasetOptions o;
+  for (const auto& [name, value] : sigmas) {
+    if (value) o.noise[name] = *value;
   }
-  return n;
+  if (!form.empty()) o.noise_form = parseNoiseForm(form);
+  return o;
 }
 
 void SeifFlags::add(CLI::App& cmd) {
@@ -219,6 +196,11 @@ void Progress::operator()(std::size_t done, std::size_t total) {
                "##############################", width - filled, "", 100 * done / total);
   std::fflush(stderr);
   drawn_ = true;
+}
+
+void Progress::operator()(double fraction) {
+  constexpr std::size_t kSteps = 1000;
+  (*this)(static_cast<std::size_t>(std::clamp(fraction, 0.0, 1.0) * kSteps), kSteps);
 }
 
 Progress::~Progress() {

@@ -2,6 +2,9 @@
 // Option groups shared by the commands that run filters.
 #include <seif/filters/factory.hpp>
 #include <seif/core/dataset.hpp>
+#include <seif/io/event_source.hpp>
+
+#include <map>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -34,18 +37,14 @@ CLI::Validator seedValue();
 /// folder and throws DataError naming it when it is not a folder or not writable (exit 2).
 void requireOutputFolder(const std::string& out);
 
-/// Noise of the MRCLAM robots when a dataset has no meta.json (iRobot Create velocity
-/// commands, camera range and bearing): tuned once on dataset 6 and documented in README.
-NoiseModel mrclamDefaultNoise();
-
-/// --sigma-v/--sigma-w/--sigma-range/--sigma-bearing; unset flags fall back to the
-/// dataset's meta.json noise, then to mrclamDefaultNoise(). Every sigma must be finite and
-/// > 0 (isPositiveFinite): a bad flag is a usage error (std::invalid_argument), a bad value
-/// from the dataset is bad data (ModelError).
+/// --sigma-* flags of `seif run`: each overrides the dataset's noise value of that name
+/// (the reader says which names its format takes; DatasetOptions::noise). Every sigma must
+/// be finite and > 0 (isPositiveFinite): a bad flag is a usage error.
 struct NoiseFlags {
-  std::optional<double> sigma_v, sigma_w, sigma_range, sigma_bearing;
+  std::map<std::string, std::optional<double>> sigmas;  ///< noise name -> value if given
+  std::string form;                                      ///< --noise-form, empty: the format's
   void add(CLI::App& cmd);
-  NoiseModel resolve(const std::optional<NoiseModel>& dataset_noise) const;
+  DatasetOptions resolve() const;
 };
 
 /// --active/--relax/--mean/--deactivate/--seed of the SEIF.
@@ -70,6 +69,7 @@ class Progress {
  public:
   explicit Progress(std::string label);
   void operator()(std::size_t done, std::size_t total);
+  void operator()(double fraction);
   ~Progress();
 
  private:
