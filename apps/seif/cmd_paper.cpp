@@ -130,64 +130,6 @@ struct Table {
   }
 };
 
-/// Everything reported about one filter over all successful runs.
-struct FilterSummary {
-  std::string name;
-  std::vector<std::uint64_t> seeds;
-  std::vector<double> mse, rmse, aligned_mse, links, mapped, robot_links, pose_error;
-  std::vector<double> diff_to_ekf;  // per-run mse - ekf mse [m^2]
-  Summary error, rms, aligned_error, link, map, diff, pose;
-  double us_median = 0.0;
-  double us_mean = 0.0;
-  // Error relative to the EKF on the same runs: the ratio of the means, its 95% CI by the
-  // delta method for paired samples (residuals mse_i - ratio * ekf_i), and the median of the
-  // per-run ratios (what a typical run does; the means are dominated by a few runs).
-  double ratio = 1.0, ratio_ci95 = 0.0, ratio_median = 1.0;
-  double aligned_ratio = 1.0;  // aligned_error's ratio of means to the EKF's
-};
-
-FilterSummary summarizeFilter(std::size_t f, const std::vector<PaperRun>& runs) {
-  FilterSummary s;
-  s.name = runs.front().filters[f].name;
-  std::vector<double> us;
-  for (const PaperRun& run : runs) {
-    const PaperFilterResult& r = run.filters[f];
-    s.seeds.push_back(run.seed);
-    s.mse.push_back(r.mse);
-    s.rmse.push_back(r.rmse);
-    s.aligned_mse.push_back(r.aligned_mse);
-    s.links.push_back(static_cast<double>(r.stats.links));
-    s.mapped.push_back(static_cast<double>(r.mapped));
-    s.robot_links.push_back(static_cast<double>(r.stats.robot_links));
-    s.pose_error.push_back(r.pose_error);
-    s.diff_to_ekf.push_back(r.mse - run.filters[0].mse);
-    for (double t : r.step_seconds) us.push_back(1e6 * t);
-  }
-  s.error = summarize(s.mse);
-  s.rms = summarize(s.rmse);
-  s.aligned_error = summarize(s.aligned_mse);
-  s.link = summarize(s.links);
-  s.map = summarize(s.mapped);
-  s.diff = summarize(s.diff_to_ekf);
-  s.pose = summarize(s.pose_error);
-  std::vector<double> ekf_mse, residual, ratios;
-  for (const PaperRun& run : runs) ekf_mse.push_back(run.filters[0].mse);
-  const double ekf_mean = sampleMean(ekf_mse);
-  s.ratio = s.error.mean / ekf_mean;
-  for (std::size_t r = 0; r < runs.size(); ++r) {
-    residual.push_back(s.mse[r] - s.ratio * ekf_mse[r]);
-    ratios.push_back(s.mse[r] / ekf_mse[r]);
-  }
-  s.ratio_ci95 = ci95HalfWidth(residual) / ekf_mean;
-  s.ratio_median = median(std::move(ratios));
-  std::vector<double> ekf_aligned;
-  for (const PaperRun& run : runs) ekf_aligned.push_back(run.filters[0].aligned_mse);
-  s.aligned_ratio = s.aligned_error.mean / sampleMean(ekf_aligned);
-  s.us_mean = sampleMean(us);
-  s.us_median = median(std::move(us));
-  return s;
-}
-
 nlohmann::json matrixJson(const Eigen::MatrixXd& m) {
   nlohmann::json rows = nlohmann::json::array();
   for (Eigen::Index r = 0; r < m.rows(); ++r) {
@@ -311,9 +253,9 @@ void paperCommand(const PaperArgs& args) {
   }
   if (runs.empty()) throw NumericError("every run failed");
 
-  std::vector<FilterSummary> sums;
-  for (std::size_t f = 0; f < specs.size(); ++f) sums.push_back(summarizeFilter(f, runs));
-  const FilterSummary& ekf = sums[0];
+  std::vector<PaperFilterSummary> sums;
+  for (std::size_t f = 0; f < specs.size(); ++f) sums.push_back(summarizePaperFilter(f, runs));
+  const PaperFilterSummary& ekf = sums[0];
   const std::size_t n_runs = runs.size();
   const int N = world.landmarks;
 
@@ -337,7 +279,7 @@ void paperCommand(const PaperArgs& args) {
   table.header = {"filter", "runs", "final error (95% CI) [10^-3 m^2]", "paper", "error / EKF (95% CI)",
                   "paper", "final links (95% CI)", "paper", "µs per update (median)", "complexity"};
   for (std::size_t f = 0; f < 3; ++f) {
-    const FilterSummary& s = sums[f];
+    const PaperFilterSummary& s = sums[f];
     const PaperReference ref = reference(s.name);
     table.rows.push_back({
         ref.label,
@@ -422,7 +364,7 @@ void paperCommand(const PaperArgs& args) {
     sweep.header = {"theta_x (active)", "runs", "final error (95% CI) [10^-3 m^2]", "error / EKF (95% CI)",
                     "journal", "final links (95% CI)", "µs per update (median)", "time / EKF"};
     for (std::size_t k = 0; k < args.sweep_active.size(); ++k) {
-      const FilterSummary& s = sums[3 + k];
+      const PaperFilterSummary& s = sums[3 + k];
       const int active = args.sweep_active[k];
       const auto journal = journalErrorRatio(active);
       sweep.rows.push_back({std::to_string(active), std::to_string(s.error.n),
@@ -511,7 +453,7 @@ void paperCommand(const PaperArgs& args) {
   };
   nlohmann::json filters = nlohmann::json::array();
   for (std::size_t f = 0; f < sums.size(); ++f) {
-    const FilterSummary& s = sums[f];
+    const PaperFilterSummary& s = sums[f];
     const PaperFilterSpec& spec = specs[f];
     nlohmann::json per_run = nlohmann::json::array();
     for (std::size_t r = 0; r < s.mse.size(); ++r) {

@@ -1,4 +1,5 @@
 #include <seif/eval/paper.hpp>
+#include <seif/eval/stats.hpp>
 
 #include <seif/core/errors.hpp>
 #include <seif/filters/ekf_slam.hpp>
@@ -178,5 +179,48 @@ FilterSnapshot snapshotById(const SlamFilter& filter) {
   }
   return s;
 }
+
+PaperFilterSummary summarizePaperFilter(std::size_t f, const std::vector<PaperRun>& runs) {
+  PaperFilterSummary s;
+  s.name = runs.front().filters[f].name;
+  std::vector<double> us;
+  for (const PaperRun& run : runs) {
+    const PaperFilterResult& r = run.filters[f];
+    s.seeds.push_back(run.seed);
+    s.mse.push_back(r.mse);
+    s.rmse.push_back(r.rmse);
+    s.aligned_mse.push_back(r.aligned_mse);
+    s.links.push_back(static_cast<double>(r.stats.links));
+    s.mapped.push_back(static_cast<double>(r.mapped));
+    s.robot_links.push_back(static_cast<double>(r.stats.robot_links));
+    s.pose_error.push_back(r.pose_error);
+    s.diff_to_ekf.push_back(r.mse - run.filters[0].mse);
+    for (double t : r.step_seconds) us.push_back(1e6 * t);
+  }
+  s.error = summarize(s.mse);
+  s.rms = summarize(s.rmse);
+  s.aligned_error = summarize(s.aligned_mse);
+  s.link = summarize(s.links);
+  s.map = summarize(s.mapped);
+  s.diff = summarize(s.diff_to_ekf);
+  s.pose = summarize(s.pose_error);
+  std::vector<double> ekf_mse, residual, ratios;
+  for (const PaperRun& run : runs) ekf_mse.push_back(run.filters[0].mse);
+  const double ekf_mean = sampleMean(ekf_mse);
+  s.ratio = s.error.mean / ekf_mean;
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    residual.push_back(s.mse[r] - s.ratio * ekf_mse[r]);
+    ratios.push_back(s.mse[r] / ekf_mse[r]);
+  }
+  s.ratio_ci95 = ci95HalfWidth(residual) / ekf_mean;
+  s.ratio_median = median(std::move(ratios));
+  std::vector<double> ekf_aligned;
+  for (const PaperRun& run : runs) ekf_aligned.push_back(run.filters[0].aligned_mse);
+  s.aligned_ratio = s.aligned_error.mean / sampleMean(ekf_aligned);
+  s.us_mean = sampleMean(us);
+  s.us_median = median(std::move(us));
+  return s;
+}
+
 
 }  // namespace seif

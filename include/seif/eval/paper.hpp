@@ -6,6 +6,7 @@
 // runPaperExperiment() is one run of the Monte-Carlo study; `seif paper` runs many in
 // parallel and summarises them (eval/stats.hpp).
 #include <seif/eval/run.hpp>
+#include <seif/eval/stats.hpp>
 #include <seif/filters/seif_slam.hpp>
 #include <seif/filters/slam_filter.hpp>
 #include <seif/core/dataset.hpp>
@@ -76,6 +77,26 @@ struct PaperRun {
   SimStats sim;             ///< what the simulator saw
   std::vector<PaperFilterResult> filters;  ///< in paperFilters() order
 };
+
+/// Everything reported about one filter over all successful runs.
+struct PaperFilterSummary {
+  std::string name;
+  std::vector<std::uint64_t> seeds;
+  std::vector<double> mse, rmse, aligned_mse, links, mapped, robot_links, pose_error;
+  std::vector<double> diff_to_ekf;  // per-run mse - ekf mse [m^2]
+  Summary error, rms, aligned_error, link, map, diff, pose;
+  double us_median = 0.0;
+  double us_mean = 0.0;
+  // Error relative to the EKF on the same runs: the ratio of the means, its 95% CI by the
+  // delta method for paired samples (residuals mse_i - ratio * ekf_i), and the median of the
+  // per-run ratios (what a typical run does; the means are dominated by a few runs).
+  double ratio = 1.0, ratio_ci95 = 0.0, ratio_median = 1.0;
+  double aligned_ratio = 1.0;  // aligned_error's ratio of means to the EKF's
+};
+
+/// The summary of filter `f` (paperFilters() order; filter 0 is the EKF, the reference of
+/// the ratios) over `runs` (non-empty).
+PaperFilterSummary summarizePaperFilter(std::size_t f, const std::vector<PaperRun>& runs);
 
 /// The filters of a run kept alive after it, with their data: for figures.
 struct PaperRunDetail {
