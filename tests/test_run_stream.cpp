@@ -2,6 +2,7 @@
 // makes from a log in memory, and a streamed run equals the in-memory one.
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
+#include <seif/eval/run_dataset.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/io/robot_log_source.hpp>
 #include <seif/models/odometry_model.hpp>
@@ -133,6 +134,35 @@ TEST(RunStream, EqualsTheInMemoryRunForEveryFilter) {
     const auto dr = deadReckoning(data, startPose(data), streamed->motionModel());
     EXPECT_EQ(a.dead_reckoning.back().pose, dr.back().pose) << name;
   }
+}
+
+}  // namespace
+
+namespace {
+
+TEST(GpsRmse, IsZeroForARigidlyMovedTrajectoryAndCountsTheFixesInside) {
+  std::vector<TimedPose> traj;
+  std::vector<GpsFix> gps;
+  const double a = 0.6;
+  const Eigen::Matrix2d R = (Eigen::Matrix2d() << std::cos(a), -std::sin(a), std::sin(a), std::cos(a)).finished();
+  for (int k = 0; k <= 100; ++k) {
+    const double t = k;
+    const Vec2 p(0.1 * t * t, 3.0 * std::sin(0.2 * t));
+    traj.push_back({t, Pose2(p.x(), p.y(), 0.0)});
+    if (k % 10 == 5) gps.push_back({t + 0.5, R * Vec2(0.1 * (t + 0.5) * (t + 0.5), 0.0) + Vec2(100, -50)});
+  }
+  gps.push_back({500.0, Vec2(0, 0)});  // outside the trajectory: not compared
+  std::size_t n = 0;
+  // The GPS track is a rigid motion of a different curve: a positive error...
+  const auto e = gpsRmse(traj, gps, &n);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(n, 10u);
+  EXPECT_GT(*e, 0.1);
+  // ... and of the trajectory itself (interpolated linearly): zero up to interpolation.
+  std::vector<GpsFix> exact;
+  for (int k = 0; k <= 100; k += 7) exact.push_back({double(k), R * traj[k].pose.head<2>() + Vec2(100, -50)});
+  EXPECT_LT(*gpsRmse(traj, exact), 1e-9);
+  EXPECT_FALSE(gpsRmse(traj, {}).has_value());
 }
 
 }  // namespace

@@ -76,7 +76,7 @@ void run(const RunArgs& args) {
     std::printf("  rejected %zu gross outlier observation%s (beyond %g sigma of the measurement noise)\n",
                 out.rejected_observations, out.rejected_observations == 1 ? "" : "s", args.outlier_gate);
   }
-  std::printf("  wrote %s/{trajectory.tum,map.csv,metrics.json}\n", args.out.c_str());
+  std::printf("  wrote %s/{trajectory.tum,dead_reckoning.tum,map.csv,metrics.json}\n", args.out.c_str());
 }
 
 }  // namespace

@@ -135,6 +135,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
 
   const auto write_start = Clock::now();
   writeTum(out / "trajectory.tum", report.output.trajectory);
+  writeTum(out / "dead_reckoning.tum", report.output.dead_reckoning);
   writeMapCsv(out / "map.csv", *filter);  // the marginal covariances are computed here
   report.seconds_outputs = secondsSince(write_start);
   writeFileAtomically(out / "metrics.json", metricsJson(request, report));

@@ -2,6 +2,7 @@
 // `seif run` as one library call: open a dataset (any format), build the filter with the
 // dataset's models, stream the run, measure it and write its outputs:
 //   trajectory.tum  the filter's poses (TUM: t x y z qx qy qz qw)
+//   dead_reckoning.tum  the controls integrated alone from the same start, at the same stamps
 //   map.csv         id, x, y and the landmark's 2x2 marginal covariance
 //   metrics.json    timing, structure, errors (keys in docs/outputs.md and below)
 // Errors: ATE and map error against ground truth when the dataset has it (after the best
