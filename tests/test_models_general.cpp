@@ -163,10 +163,10 @@ TEST(MotionModels, RateNoiseDoesNotDependOnHowAnIntervalIsSplit) {
 }
 
 TEST(MotionModels, AckermannJacobiansNoiseAndBodyVelocity) {
-  const AckermannGeometry g{2.83, 0.76};
   std::mt19937_64 rng(22);
   std::uniform_real_distribution<double> pos(-100, 100), th(-kPi, kPi), ve(-1, 8), steer(-0.5, 0.5), dt(0.005, 0.2);
   for (const NoiseForm form : {NoiseForm::PerStep, NoiseForm::Rate}) {
+    const AckermannGeometry g{2.83, 0.76, form == NoiseForm::Rate ? Vec2(3.78, 0.5) : Vec2::Zero()};
     const AckermannModel model(g, 0.2, 0.03, form);
     for (int i = 0; i < 1000; ++i) {
       const Pose2 x(pos(rng), pos(rng), th(rng));
@@ -180,7 +180,7 @@ TEST(MotionModels, AckermannJacobiansNoiseAndBodyVelocity) {
                                         Eigen::Vector2d(u.speed, u.steering))));
     }
   }
-  const AckermannModel model(g, 0.2, 0.03, NoiseForm::Rate);
+  const AckermannModel model({2.83, 0.76}, 0.2, 0.03, NoiseForm::Rate);
   // Straight: the axle centre moves at the encoder's speed. Turning left, the encoder on the
   // left (inner) wheel is slower than the centre: vc = ve / (1 - tan(a) H / L).
   EXPECT_EQ(model.bodyVelocity({3.0, 0.0, 0.1}), Eigen::Vector2d(3.0, 0.0));
@@ -189,6 +189,23 @@ TEST(MotionModels, AckermannJacobiansNoiseAndBodyVelocity) {
   EXPECT_NEAR(vw(1), vw(0) * std::tan(0.2) / 2.83, 1e-12);
   EXPECT_THROW(model.bodyVelocity({3.0, std::atan(2.83 / 0.76), 0.1}), ModelError);  // encoder at the turn's centre
   EXPECT_THROW(model.bodyVelocity({3.0, kPi / 2, 0.1}), ModelError);
+}
+
+TEST(MotionModels, AckermannTrackingABodyPointMovesThatPointOfTheAxlesMotion) {
+  const Vec2 p(3.78, 0.5);
+  const AckermannModel axle({2.83, 0.76}, 0.2, 0.03, NoiseForm::Rate), laser({2.83, 0.76, p}, 0.2, 0.03, NoiseForm::Rate);
+  const auto point = [&](const Pose2& a) {
+    return Pose2(a.x() + std::cos(a.z()) * p.x() - std::sin(a.z()) * p.y(),
+                 a.y() + std::sin(a.z()) * p.x() + std::cos(a.z()) * p.y(), a.z());
+  };
+  Pose2 a(10, -3, 2.5), l = point(a);
+  for (int k = 0; k < 200; ++k) {
+    const AckermannControl u{3.0 + std::sin(0.1 * k), 0.4 * std::sin(0.05 * k), 0.025};
+    a = axle.apply(a, MotionInput(u));
+    l = laser.apply(l, MotionInput(u));
+  }
+  EXPECT_LT((point(a) - l).head<2>().norm(), 1e-9);
+  EXPECT_NEAR(wrapAngle(point(a).z() - l.z()), 0.0, 1e-12);
 }
 
 TEST(MotionModels, OdometryJacobiansAndNoise) {

@@ -3,6 +3,7 @@
 #include <seif/io/event_source.hpp>
 #include <seif/io/mrclam.hpp>
 #include <seif/io/robot_log_source.hpp>
+#include <seif/io/victoria_park.hpp>
 
 namespace seif {
 namespace {
@@ -20,7 +21,10 @@ class OwningLogSource final : public EventSource {
 };
 }  // namespace
 
-std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path, DatasetFormat, const DatasetOptions& options) {
+std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path, DatasetFormat format, const DatasetOptions& options) {
+  if (format == DatasetFormat::VictoriaPark || (format == DatasetFormat::Auto && looksLikeVictoriaPark(path))) {
+    return openVictoriaPark(path, options);
+  }
   RobotLog log = readMrclam(path, options.robot);
   const NoiseModel n = log.noise.value_or(NoiseModel{0.05, 0.2, 0.2, 0.03});
   return std::make_unique<OwningLogSource>(std::move(log), n);

@@ -91,8 +91,9 @@ MotionIncrement VelocityModel::linearize(const Pose2& x, const MotionInput& u) c
 AckermannModel::AckermannModel(const AckermannGeometry& geometry, double sigma_speed,
                                double sigma_steering, NoiseForm form)
     : geometry_(geometry), sigma_speed_(sigma_speed), sigma_steering_(sigma_steering), form_(form) {
-  if (!std::isfinite(geometry.wheelbase) || !(geometry.wheelbase > 0.0) || !std::isfinite(geometry.encoder_offset)) {
-    throw ModelError("Ackermann model: the wheelbase must be finite and > 0 and the encoder offset finite");
+  if (!std::isfinite(geometry.wheelbase) || !(geometry.wheelbase > 0.0) || !std::isfinite(geometry.encoder_offset) ||
+      !geometry.tracked_point.allFinite()) {
+    throw ModelError("Ackermann model: the wheelbase must be finite and > 0, the offsets finite");
   }
   requireSigma(sigma_speed, "Ackermann model: sigma_speed");
   requireSigma(sigma_steering, "Ackermann model: sigma_steering");
@@ -102,7 +103,8 @@ std::string AckermannModel::describe() const {
   std::ostringstream s;
   const char* unit = form_ == NoiseForm::Rate ? "/sqrt(s)" : " per step";
   s << "Ackermann (encoder speed, steering): L " << geometry_.wheelbase << " m, H "
-    << geometry_.encoder_offset << " m, sigma_speed " << sigma_speed_ << " m/s" << unit
+    << geometry_.encoder_offset << " m, state at (" << geometry_.tracked_point.x() << ", "
+    << geometry_.tracked_point.y() << ") m from the rear axle, sigma_speed " << sigma_speed_ << " m/s" << unit
     << ", sigma_steering " << sigma_steering_ << " rad" << (form_ == NoiseForm::Rate ? "*sqrt(s)" : " per step")
     << " (" << noiseFormName(form_) << " noise)";
   return s.str();
@@ -134,6 +136,16 @@ MotionIncrement AckermannModel::linearize(const Pose2& x, const AckermannControl
   MotionIncrement m;
   Mat32 V;
   m.delta = VelocityMotionModel::delta(x, {vw(0), vw(1), u.dt}, &m.J_delta_x, &V);
+  const Vec2& p = geometry_.tracked_point;
+  if (!p.isZero(0.0)) {  // + (R(th + w dt) - R(th)) p: the point turns about the axle
+    const double th0 = x.z(), th1 = x.z() + vw(1) * u.dt;
+    const Vec2 r0(std::cos(th0) * p.x() - std::sin(th0) * p.y(), std::sin(th0) * p.x() + std::cos(th0) * p.y());
+    const Vec2 r1(std::cos(th1) * p.x() - std::sin(th1) * p.y(), std::sin(th1) * p.x() + std::cos(th1) * p.y());
+    const Vec2 dr1(-r1.y(), r1.x()), dr0(-r0.y(), r0.x());  // d/dth of R(th) p
+    m.delta.head<2>() += r1 - r0;
+    m.J_delta_x.block<2, 1>(0, 2) += dr1 - dr0;
+    V.block<2, 1>(0, 1) += dr1 * u.dt;  // d/dw
+  }
   m.U = controlNoiseToPose(V * J_body, sigma_speed_ * sigma_speed_, sigma_steering_ * sigma_steering_, form_, u.dt);
   return m;
 }

@@ -1,14 +1,14 @@
 #pragma once
-// Car-like (Ackermann) vehicle, the state being the pose of the rear axle's centre
-// (../shared/data/README.md, Victoria Park; Guivant & Nebot 2001). The input is the speed
-// ve measured by an encoder on a rear wheel H metres left of the centre line and the
-// steering angle alpha of the front wheels; the wheelbase is L:
+// Car-like (Ackermann) vehicle (../shared/data/README.md, Victoria Park; Guivant & Nebot
+// 2001). The input is the speed ve measured by an encoder on a rear wheel H metres left of
+// the centre line and the steering angle alpha of the front wheels; the wheelbase is L:
 //   vc = ve / (1 - tan(alpha) H / L),   w = vc tan(alpha) / L,
-// and the pose moves as the velocity model with (vc, w) for dt (the exact arc). Noise on
-// (ve, alpha) in the given form (velocity_model.hpp). The sensor's mounting (a, b on the
-// truck) belongs to the measurement model (measurement_model.hpp).
-// Guivant and Nebot track the laser's position instead; the two states describe the same
-// rigid motion (the laser point moves with vc plus w x (a, b)).
+// and the rear axle's centre moves on the exact arc of (vc, w) for dt (velocity model).
+// The state is the pose of a point p = (a, b) fixed on the body, in the axle's frame
+// (`tracked_point`; 0 = the axle itself). Guivant and Nebot track the laser, so that
+//   Delta = chord(th) + (R(th + w dt) - R(th)) p,
+// the first-order form of which is their x' = x + dt vc (cos th - tan(alpha)(a sin th +
+// b cos th) / L), .... Noise on (ve, alpha) in the given form (velocity_model.hpp).
 #include <seif/models/velocity_model.hpp>
 
 namespace seif {
@@ -16,6 +16,7 @@ namespace seif {
 struct AckermannGeometry {
   double wheelbase = 2.83;       ///< L [m]
   double encoder_offset = 0.76;  ///< H [m], encoder wheel left of the centre line
+  Vec2 tracked_point = Vec2::Zero();  ///< (a, b) [m]: the point whose pose is the state
 };
 
 class AckermannModel final : public MotionModel {
