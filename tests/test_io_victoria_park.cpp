@@ -1,5 +1,7 @@
 // The Victoria Park reader: events, conventions, noise, every malformed line, and the real
 // folder when ../shared/data is present.
+#include "../fuzz/fuzz_events.hpp"
+
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
 #include <seif/io/victoria_park.hpp>
@@ -7,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <numbers>
 #include <set>
 
@@ -149,6 +153,35 @@ TEST(VictoriaPark, TheRealFolder) {
   EXPECT_NEAR(last - first, 1548.6, 0.1);  // the 26 minutes of the README
   EXPECT_GT(path, 3000.0);  // ~4 km driven (README)
   EXPECT_LT(path, 5000.0);
+}
+
+// Every input kept for the fuzzer (seed corpus and past findings) is read to the end or
+// refused with a printable DataError, and every event keeps the readers' promises.
+TEST(VictoriaPark, FuzzInputsAreReadOrRefusedCleanly) {
+  constexpr const char* kFiles[] = {"controls.txt", "tree_observations_associated_UTS.txt", "gps.txt"};
+  std::size_t inputs = 0;
+  for (const char* kind : {"regressions", "corpus"}) {
+    for (const auto& entry : fs::directory_iterator(fs::path(SEIF_SOURCE_DIR) / "fuzz" / kind / "fuzz_victoria_park")) {
+      std::ifstream in(entry.path(), std::ios::binary);
+      const std::string input((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      VictoriaParkFiles files;
+      files.folder = "fuzz";
+      files.text = fuzz::splitFiles(input, kFiles);
+      try {
+        auto source = openVictoriaPark(files, {});
+        Event e;
+        double previous = -INFINITY;
+        while (source->next(e)) {
+          ASSERT_EQ(fuzz::brokenEvent(e, previous), "") << entry.path();
+          previous = eventTime(e);
+        }
+      } catch (const DataError& e) {
+        EXPECT_TRUE(fuzz::printable(e.what())) << entry.path();
+      }
+      ++inputs;
+    }
+  }
+  EXPECT_GE(inputs, 6u);
 }
 
 }  // namespace
