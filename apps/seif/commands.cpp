@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   addRunCommand(app);
   addBenchCommand(app);
   addPaperCommand(app);
+  addConvertCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -16,5 +16,6 @@ void addSimulateCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addPaperCommand(CLI::App& app);
+void addConvertCommand(CLI::App& app);
 
 }  // namespace seif::cli

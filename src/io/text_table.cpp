@@ -67,6 +67,12 @@ TextTable::TextTable(TextTable&&) noexcept = default;
 TextTable& TextTable::operator=(TextTable&&) noexcept = default;
 TextTable::~TextTable() = default;
 
+std::size_t TextTable::offset() const {
+  if (!file_) return std::min(pos_, text_.size());
+  const auto p = file_->tellg();
+  return p < 0 ? 0 : static_cast<std::size_t>(p);
+}
+
 bool TextTable::next() {
   named_ = 0;
   if (file_) {

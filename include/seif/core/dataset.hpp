@@ -49,6 +49,7 @@ struct GpsFix {
 struct ControlEvent {
   double time = 0.0;
   MotionInput input;
+  long long pose = -1;  ///< id of the pose reached, when the source numbers poses (graph files)
 };
 
 /// The observations made at one instant (one linearisation point).

@@ -39,6 +39,7 @@ struct DatasetInfo {
   /// "first VERTEX_SE2 of the file", "origin: the dataset has no ground truth", ...).
   Pose2 start_pose = Pose2::Zero();
   std::string start_pose_source;
+  long long start_pose_id = -1;   ///< id of the start pose, when the source numbers poses
   std::map<int, Vec2> landmarks;  ///< ground-truth landmark positions; may be empty
   bool has_groundtruth = false;   ///< the stream carries TimedPose events
   bool has_gps = false;           ///< the stream carries GpsFix events

@@ -43,6 +43,8 @@ class TextTable {
   bool next();
 
   const std::string& name() const { return name_; }
+  /// Bytes read so far (for progress bars).
+  std::size_t offset() const;
   long line() const { return line_; }
   /// Fields of the current line.
   std::size_t size() const { return count_; }
