@@ -44,11 +44,18 @@ Eigen::Matrix<double, N, N> invert(const Eigen::Matrix<double, N, N>& m) {
   return m.inverse();
 }
 
+/// The covariance a record gives: its matrix (iSAM), or the inverse of its information
+/// matrix (g2o). Either must be symmetric positive definite, and the covariance finite.
 template <int N>
-void requireSpd(const TextTable& t, const Eigen::Matrix<double, N, N>& m, const char* what) {
-  if (Eigen::LLT<Eigen::Matrix<double, N, N>>(m).info() != Eigen::Success) {
-    t.fail(std::string(what) + " is not positive definite");
+Eigen::Matrix<double, N, N> recordCovariance(const TextTable& t, std::size_t first, bool information) {
+  const Eigen::Matrix<double, N, N> m = upperTriangle<N>(t, first);
+  const char* what = information ? "the information matrix" : "the covariance";
+  if (Eigen::LLT<Eigen::Matrix<double, N, N>>(m).info() != Eigen::Success) t.fail(std::string(what) + " is not positive definite");
+  const Eigen::Matrix<double, N, N> c = information ? invert<N>(m) : m;
+  if (!c.allFinite() || Eigen::LLT<Eigen::Matrix<double, N, N>>(c).info() != Eigen::Success) {
+    t.fail(std::string(what) + " is too close to singular for a finite covariance");
   }
+  return c;
 }
 
 /// The first data line's tag of a file, or empty.
@@ -167,9 +174,7 @@ class GraphSource final : public EventSource {
     if (!reached_.insert(to).second) table_.fail("pose " + std::to_string(to) + " is reached twice: the chain must reach a new pose");
     OdometryIncrement u;
     u.delta = Vec3(table_.real(3), table_.real(4), table_.real(5));
-    const Mat3 m = upperTriangle<3>(table_, 6);
-    requireSpd(table_, m, isam ? "the covariance" : "the information matrix");
-    u.covariance = isam ? m : invert<3>(m);
+    u.covariance = recordCovariance<3>(table_, 6, !isam);
     flush();
     ++k_;
     ready_.push_back(ControlEvent{static_cast<double>(k_), u, to});
@@ -189,9 +194,7 @@ class GraphSource final : public EventSource {
     } else {
       table_.expect({isam ? "LANDMARK" : "EDGE_SE2_XY", "pose", "landmark", "x", "y", "m11", "m12", "m22"});
       z.z = Vec2(table_.real(3), table_.real(4));
-      const Mat2 m = upperTriangle<2>(table_, 5);
-      requireSpd(table_, m, isam ? "the covariance" : "the information matrix");
-      z.noise = isam ? m : invert<2>(m);
+      z.noise = recordCovariance<2>(table_, 5, !isam);
     }
     if (kind != sensor_) {
       table_.fail("a file holds one kind of landmark observation: this " + std::string(table_.field(0)) +
