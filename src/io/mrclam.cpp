@@ -4,6 +4,9 @@
 #include <seif/core/errors.hpp>
 #include <seif/io/atomic_file.hpp>
 #include <seif/io/mrclam.hpp>
+#include <seif/io/text_table.hpp>
+
+#include "mrclam_rows.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -36,181 +39,10 @@ constexpr int kBarcodeOffset = 100;  // writer: barcode = 100 + subject
 
 bool isRobot(int subject) { return subject >= kFirstRobot && subject <= kLastRobot; }
 
-std::string formatDouble(double x) {
-  std::array<char, 64> buf{};
-  const auto res = std::to_chars(buf.data(), buf.data() + buf.size(), x);
-  return std::string(buf.data(), res.ptr);
-}
-
-/// A field as shown in a message: quoted, and shortened if absurdly long.
-std::string quoted(std::string_view field) {
-  constexpr std::size_t kMax = 40;
-  if (field.size() > kMax) return "'" + std::string(field.substr(0, kMax)) + "...'";
-  return "'" + std::string(field) + "'";
-}
-
-/// The text of `path`; nullopt when it does not exist (a dangling link included). Throws
-/// DataError naming the file when it exists but cannot be read.
-std::optional<std::string> readFileIfExists(const fs::path& path) {
-  const std::string name = path.string();
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (status.type() == fs::file_type::not_found) return std::nullopt;
-  if (ec == std::errc::too_many_symbolic_link_levels) {
-    throw DataError(name, 0, "symbolic-link loop: " + ec.message());
-  }
-  if (ec) throw DataError(name, 0, "cannot access file: " + ec.message());
-  if (!fs::is_regular_file(status)) throw DataError(name, 0, "not a regular file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw DataError(name, 0, "cannot open file for reading");
-  std::string text;
-  const auto size = fs::file_size(path, ec);
-  if (!ec) text.reserve(static_cast<std::size_t>(size));
-  std::array<char, 1 << 16> chunk{};
-  while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
-    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
-  }
-  if (in.bad()) throw DataError(name, 0, "read error");
-  return text;
-}
-
 /// File `name` of `folder` as named in messages.
 std::string fileName(std::string_view folder, std::string_view name) {
   return (fs::path(folder) / name).string();
 }
-
-/// One whitespace-separated table: iterates over the data lines of a file, checks the field
-/// count, and parses fields strictly. Every failure is a DataError naming file and line.
-/// The table refers to `folder`, `name` and `text`, which must outlive it.
-class Table {
- public:
-  Table(std::string_view folder, std::string_view name, std::string_view text,
-        std::initializer_list<const char*> columns)
-      : folder_(folder), name_(name), text_(text), count_(columns.size()) {
-    assert(count_ <= kMaxColumns);
-    std::copy(columns.begin(), columns.end(), columns_.begin());
-  }
-
-  long line() const { return line_; }
-
-  /// An upper bound of the number of data lines (for reserve()).
-  std::size_t lineBound() const {
-    std::size_t n = 1;
-    for (std::size_t i = text_.find('\n'); i != std::string_view::npos; i = text_.find('\n', i + 1)) {
-      ++n;
-    }
-    return n;
-  }
-
-  /// Advances to the next data line; false at the end of the file.
-  bool next() {
-    while (pos_ < text_.size()) {
-      std::size_t eol = text_.find('\n', pos_);
-      if (eol == std::string_view::npos) eol = text_.size();
-      const std::string_view line(text_.data() + pos_, eol - pos_);
-      pos_ = eol + 1;
-      ++line_;
-      if (split(line)) return true;
-    }
-    return false;
-  }
-
-  /// Column `col` (0-based) as a finite double.
-  double real(std::size_t col) const {
-    const std::string_view f = fields_[col];
-    double value = 0.0;
-    const auto res = std::from_chars(f.data(), f.data() + f.size(), value);
-    if (res.ec == std::errc::result_out_of_range && res.ptr == f.data() + f.size()) {
-      fail("number " + quoted(f) + " out of range in " + columnName(col));
-    }
-    if (res.ec != std::errc() || res.ptr != f.data() + f.size()) {
-      fail("bad number " + quoted(f) + " in " + columnName(col));
-    }
-    if (!std::isfinite(value)) fail("non-finite number " + quoted(f) + " in " + columnName(col));
-    return value;
-  }
-
-  /// Column `col` (0-based) as an int.
-  int integer(std::size_t col) const {
-    const std::string_view f = fields_[col];
-    int value = 0;
-    const auto res = std::from_chars(f.data(), f.data() + f.size(), value);
-    if (res.ec != std::errc() || res.ptr != f.data() + f.size()) {
-      fail("bad integer " + quoted(f) + " in " + columnName(col));
-    }
-    return value;
-  }
-
-  [[noreturn]] void fail(const std::string& what) const {
-    throw DataError(fileName(folder_, name_), line_, what);
-  }
-
-  /// "column 3 (range)"
-  std::string columnName(std::size_t col) const {
-    return "column " + std::to_string(col + 1) + " (" + columns_[col] + ")";
-  }
-
- private:
-  static bool isBlank(char c) {
-    switch (c) {
-      case ' ': case '\t': case '\r': case '\v': case '\f': return true;
-      default: return false;
-    }
-  }
-
-  /// Splits a line into fields_; false for blank and comment lines.
-  bool split(std::string_view line) {
-    std::size_t i = 0;
-    std::size_t n = 0;
-    while (true) {
-      while (i < line.size() && isBlank(line[i])) ++i;
-      if (i == line.size()) break;
-      if (n == 0 && line[i] == '#') return false;
-      const std::size_t start = i;
-      while (i < line.size() && !isBlank(line[i])) ++i;
-      if (n < count_) fields_[n] = line.substr(start, i - start);
-      ++n;
-    }
-    if (n == 0) return false;
-    if (n != count_) {
-      std::string names;
-      for (std::size_t c = 0; c < count_; ++c) {
-        if (!names.empty()) names += ' ';
-        names += columns_[c];
-      }
-      fail("expected " + std::to_string(count_) + " fields (" + names + "), found " +
-           std::to_string(n));
-    }
-    return true;
-  }
-
-  std::string_view folder_;
-  std::string_view name_;
-  std::string_view text_;
-  static constexpr std::size_t kMaxColumns = 5;
-  std::size_t count_;  // columns
-  std::array<const char*, kMaxColumns> columns_{};
-  std::array<std::string_view, kMaxColumns> fields_{};
-  std::size_t pos_ = 0;
-  long line_ = 0;
-};
-
-/// Time stamps within one file must not decrease.
-class TimeOrder {
- public:
-  void check(const Table& t, double time) {
-    if (time < previous_) {
-      t.fail("time " + formatDouble(time) + " goes backwards (line " +
-             std::to_string(previous_line_) + " has " + formatDouble(previous_) + ")");
-    }
-    previous_ = time;
-    previous_line_ = t.line();
-  }
-
- private:
-  double previous_ = -std::numeric_limits<double>::infinity();
-  long previous_line_ = 0;
-};
 
 std::string robotFile(int robot, const char* kind) {
   return "Robot" + std::to_string(robot) + "_" + kind + ".dat";
@@ -275,6 +107,90 @@ std::optional<NoiseModel> parseMetaJson(std::string_view text, const std::string
   return noise;
 }
 
+}  // namespace
+
+Barcodes parseBarcodes(TextTable& t) {
+  Barcodes barcodes;
+  std::map<int, long> subject_line;
+  std::map<int, long> barcode_line;
+  while (t.next()) {
+    t.expect({"subject", "barcode"});
+    const int subject = t.integer(0);
+    const int barcode = t.integer(1);
+    if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
+    if (barcode < 0) t.fail("barcode " + std::to_string(barcode) + " must not be negative");
+    if (const auto [it, fresh] = barcode_line.emplace(barcode, t.line()); !fresh) {
+      t.fail("barcode " + std::to_string(barcode) + " listed twice (first on line " + std::to_string(it->second) + ")");
+    }
+    if (const auto [it, fresh] = subject_line.emplace(subject, t.line()); !fresh) {
+      t.fail("subject " + std::to_string(subject) + " listed twice (first on line " + std::to_string(it->second) + ")");
+    }
+    barcodes.emplace(barcode, subject);
+  }
+  return barcodes;
+}
+
+std::map<int, Vec2> parseLandmarks(TextTable& t) {
+  std::map<int, Vec2> landmarks;
+  while (t.next()) {
+    t.expect({"subject", "x", "y", "x_sd", "y_sd"});
+    const int subject = t.integer(0);
+    const double x = t.real(1);
+    const double y = t.real(2);
+    const double x_sd = t.real(3);
+    const double y_sd = t.real(4);
+    if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
+    if (isRobot(subject)) t.fail("subject " + std::to_string(subject) + " is a robot (1-5), not a landmark");
+    if (x_sd < 0.0 || y_sd < 0.0) t.fail("negative standard deviation");
+    if (!landmarks.emplace(subject, Vec2(x, y)).second) t.fail("landmark " + std::to_string(subject) + " listed twice");
+  }
+  return landmarks;
+}
+
+OdometryRecord odometryRow(TextTable& t, TimeOrder& order) {
+  t.expect({"time", "v", "w"});
+  OdometryRecord r;
+  r.time = t.real(0);
+  r.v = t.real(1);
+  r.w = t.real(2);
+  order.check(t, r.time);
+  return r;
+}
+
+std::optional<MeasurementRecord> measurementRow(TextTable& t, TimeOrder& order, const Barcodes& barcodes,
+                                                DropCounts& dropped) {
+  t.expect({"time", "barcode", "range", "bearing"});
+  MeasurementRecord m;
+  m.time = t.real(0);
+  const int barcode = t.integer(1);
+  m.range = t.real(2);
+  m.bearing = t.real(3);
+  order.check(t, m.time);
+  if (!(m.range > 0.0)) t.fail("range " + formatDouble(m.range) + " must be positive");
+  const auto it = barcodes.find(barcode);
+  if (it == barcodes.end()) {
+    ++dropped.unknown_barcodes;
+    return std::nullopt;
+  }
+  if (isRobot(it->second)) {
+    ++dropped.robot_measurements;
+    return std::nullopt;
+  }
+  m.subject = it->second;
+  return m;
+}
+
+TimedPose groundtruthRow(TextTable& t, TimeOrder& order) {
+  t.expect({"time", "x", "y", "theta"});
+  TimedPose p;
+  p.time = t.real(0);
+  p.pose = Pose2(t.real(1), t.real(2), t.real(3));
+  order.check(t, p.time);
+  return p;
+}
+
+namespace {
+
 /// The reader proper. `read(name)` returns the text of file `name` of the folder, nullopt
 /// when it is absent; the view it returns stays valid until its next call.
 template <class Read>
@@ -290,106 +206,35 @@ RobotLog parseMrclam(const std::string& folder, int robot, Read&& read) {
   RobotLog log;
   log.source = folder;
   log.robot = robot;
+  Barcodes barcodes;
 
-  // Barcodes.dat: subject barcode.
-  struct BarcodeRow {
-    int subject;
-    long line;
-  };
-  std::map<int, BarcodeRow> barcodes;
   {
-    Table t(folder, "Barcodes.dat", required("Barcodes.dat"), {"subject", "barcode"});
-    std::map<int, long> subject_line;
-    while (t.next()) {
-      const int subject = t.integer(0);
-      const int barcode = t.integer(1);
-      if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
-      if (barcode < 0) t.fail("barcode " + std::to_string(barcode) + " must not be negative");
-      if (const auto [it, fresh] = barcodes.emplace(barcode, BarcodeRow{subject, t.line()}); !fresh) {
-        t.fail("barcode " + std::to_string(barcode) + " listed twice (first on line " +
-               std::to_string(it->second.line) + ")");
-      }
-      if (const auto [it, fresh] = subject_line.emplace(subject, t.line()); !fresh) {
-        t.fail("subject " + std::to_string(subject) + " listed twice (first on line " +
-               std::to_string(it->second) + ")");
-      }
-    }
+    TextTable t(fileName(folder, "Barcodes.dat"), required("Barcodes.dat"));
+    barcodes = parseBarcodes(t);
   }
-
-  // Landmark_Groundtruth.dat: subject x y x_sd y_sd.
   {
-    Table t(folder, "Landmark_Groundtruth.dat", required("Landmark_Groundtruth.dat"),
-            {"subject", "x", "y", "x_sd", "y_sd"});
-    while (t.next()) {
-      const int subject = t.integer(0);
-      const double x = t.real(1);
-      const double y = t.real(2);
-      const double x_sd = t.real(3);
-      const double y_sd = t.real(4);
-      if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
-      if (isRobot(subject)) t.fail("subject " + std::to_string(subject) + " is a robot (1-5), not a landmark");
-      if (x_sd < 0.0 || y_sd < 0.0) t.fail("negative standard deviation");
-      if (!log.landmarks.emplace(subject, Vec2(x, y)).second) {
-        t.fail("landmark " + std::to_string(subject) + " listed twice");
-      }
-    }
+    TextTable t(fileName(folder, "Landmark_Groundtruth.dat"), required("Landmark_Groundtruth.dat"));
+    log.landmarks = parseLandmarks(t);
   }
-
-  // RobotN_Odometry.dat: time v w.
   {
     const std::string name = robotFile(robot, "Odometry");
-    Table t(folder, name, required(name), {"time", "v", "w"});
-    log.odometry.reserve(t.lineBound());
+    TextTable t(fileName(folder, name), required(name));
     TimeOrder order;
-    while (t.next()) {
-      OdometryRecord r;
-      r.time = t.real(0);
-      r.v = t.real(1);
-      r.w = t.real(2);
-      order.check(t, r.time);
-      log.odometry.push_back(r);
-    }
+    while (t.next()) log.odometry.push_back(odometryRow(t, order));
   }
-
-  // RobotN_Measurement.dat: time barcode range bearing.
   {
     const std::string name = robotFile(robot, "Measurement");
-    Table t(folder, name, required(name), {"time", "barcode", "range", "bearing"});
-    log.measurements.reserve(t.lineBound());
+    TextTable t(fileName(folder, name), required(name));
     TimeOrder order;
     while (t.next()) {
-      MeasurementRecord m;
-      m.time = t.real(0);
-      const int barcode = t.integer(1);
-      m.range = t.real(2);
-      m.bearing = t.real(3);
-      order.check(t, m.time);
-      if (!(m.range > 0.0)) t.fail("range " + formatDouble(m.range) + " must be positive");
-      const auto it = barcodes.find(barcode);
-      if (it == barcodes.end()) {
-        ++log.dropped.unknown_barcodes;
-      } else if (isRobot(it->second.subject)) {
-        ++log.dropped.robot_measurements;
-      } else {
-        m.subject = it->second.subject;
-        log.measurements.push_back(m);
-      }
+      if (const auto m = measurementRow(t, order, barcodes, log.dropped)) log.measurements.push_back(*m);
     }
   }
-
-  // RobotN_Groundtruth.dat (optional): time x y theta.
   const std::string gt_name = robotFile(robot, "Groundtruth");
   if (const std::optional<std::string_view> text = read(gt_name)) {
-    Table t(folder, gt_name, *text, {"time", "x", "y", "theta"});
-    log.groundtruth.reserve(t.lineBound());
+    TextTable t(fileName(folder, gt_name), *text);
     TimeOrder order;
-    while (t.next()) {
-      TimedPose p;
-      p.time = t.real(0);
-      p.pose = Pose2(t.real(1), t.real(2), t.real(3));
-      order.check(t, p.time);
-      log.groundtruth.push_back(p);
-    }
+    while (t.next()) log.groundtruth.push_back(groundtruthRow(t, order));
   }
 
   // meta.json (optional).

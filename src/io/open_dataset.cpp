@@ -1,36 +1,39 @@
-// openDataset(): interim, until the streaming readers land.
+// openDataset(): the one entry to every reader (include/seif/io/event_source.hpp).
 #include <seif/core/errors.hpp>
 #include <seif/io/event_source.hpp>
 #include <seif/io/graph_file.hpp>
-#include <seif/io/mrclam.hpp>
-#include <seif/io/robot_log_source.hpp>
+#include <seif/io/mrclam_source.hpp>
 #include <seif/io/victoria_park.hpp>
 
 namespace seif {
-namespace {
-class OwningLogSource final : public EventSource {
- public:
-  explicit OwningLogSource(RobotLog log, const NoiseModel& n) : log_(std::move(log)), source_(log_, n) {}
-  const DatasetInfo& info() const override { return source_.info(); }
-  bool next(Event& e) override { return source_.next(e); }
-  double progress() const override { return source_.progress(); }
-  std::map<std::string, std::size_t> dropped() const override { return source_.dropped(); }
 
- private:
-  RobotLog log_;
-  RobotLogSource source_;
-};
-}  // namespace
-
-std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path, DatasetFormat format, const DatasetOptions& options) {
-  if (format == DatasetFormat::VictoriaPark || (format == DatasetFormat::Auto && looksLikeVictoriaPark(path))) {
-    return openVictoriaPark(path, options);
+std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path, DatasetFormat format,
+                                         const DatasetOptions& options) {
+  if (format == DatasetFormat::Auto) {
+    if (looksLikeMrclam(path)) {
+      format = DatasetFormat::Mrclam;
+    } else if (looksLikeVictoriaPark(path)) {
+      format = DatasetFormat::VictoriaPark;
+    } else if (looksLikeIsam(path)) {
+      format = DatasetFormat::Isam;
+    } else if (looksLikeG2o(path)) {
+      format = DatasetFormat::G2o;
+    } else {
+      throw DataError(path.string(), 0,
+                      "cannot tell the dataset's format; pass --format with one of: mrclam (a folder with "
+                      "Barcodes.dat and RobotN_Odometry.dat), victoria-park (a folder with controls.txt and "
+                      "tree_observations_associated_UTS.txt), isam (a text file of ODOMETRY / LANDMARK / BR "
+                      "records), g2o (a text file of VERTEX_SE2 / VERTEX_XY / EDGE_SE2 / EDGE_SE2_XY records)");
+    }
   }
-  if (format == DatasetFormat::Isam || (format == DatasetFormat::Auto && looksLikeIsam(path))) return openIsam(path, options);
-  if (format == DatasetFormat::G2o || (format == DatasetFormat::Auto && looksLikeG2o(path))) return openG2o(path, options);
-  RobotLog log = readMrclam(path, options.robot);
-  const NoiseModel n = log.noise.value_or(NoiseModel{0.05, 0.2, 0.2, 0.03});
-  return std::make_unique<OwningLogSource>(std::move(log), n);
+  switch (format) {
+    case DatasetFormat::Mrclam: return openMrclam(path, options);
+    case DatasetFormat::VictoriaPark: return openVictoriaPark(path, options);
+    case DatasetFormat::Isam: return openIsam(path, options);
+    case DatasetFormat::G2o: return openG2o(path, options);
+    case DatasetFormat::Auto: break;
+  }
+  throw std::invalid_argument("openDataset: no reader for this format");
 }
 
 void convertDataset(const std::filesystem::path& in, DatasetFormat in_format, const std::filesystem::path& out,
