@@ -273,3 +273,13 @@ TEST(Seif, RelaxationIsCappedAtTheMapSize) {
   }
   EXPECT_EQ(a.mean(), b.mean());
 }
+
+TEST(Seif, LowerInformationIsTheLowerTriangleOfH) {
+  const test::Scenario s = test::makeScenario(21, 60, 150);
+  SeifSlam seif(s.start, configFor(s));
+  for (const Step& step : s.steps) seif.step(step.u, step.observations);
+  const Eigen::MatrixXd full = Eigen::MatrixXd(seif.sparseInformation());
+  const Eigen::SparseMatrix<double> lower = seif.lowerInformation();
+  EXPECT_EQ(Eigen::MatrixXd(lower), Eigen::MatrixXd(full.triangularView<Eigen::Lower>()));
+  EXPECT_GT(seif.stats().links, seif.robotLinks());  // landmark-landmark links are in it
+}

@@ -68,9 +68,7 @@ TextTable& TextTable::operator=(TextTable&&) noexcept = default;
 TextTable::~TextTable() = default;
 
 std::size_t TextTable::offset() const {
-  if (!file_) return std::min(pos_, text_.size());
-  const auto p = file_->tellg();
-  return p < 0 ? 0 : static_cast<std::size_t>(p);
+  return file_ ? consumed_ : std::min(pos_, text_.size());
 }
 
 bool TextTable::next() {
@@ -78,6 +76,7 @@ bool TextTable::next() {
   if (file_) {
     while (std::getline(*file_, buffer_)) {
       ++line_;
+      consumed_ += buffer_.size() + 1;
       if (split(buffer_)) return true;
     }
     if (file_->bad()) throw DataError(name_, line_, "read error");

@@ -98,6 +98,8 @@ class SeifSlam final : public SlamFilter {
   const SeifOptions& options() const { return options_; }
   /// H as a sparse matrix and b, in the state order [x, y, th, landmarks...].
   Eigen::SparseMatrix<double> sparseInformation() const;
+  /// Its lower triangle (what a sparse Cholesky factorisation reads), built without triplets.
+  Eigen::SparseMatrix<double> lowerInformation() const;
   Eigen::VectorXd informationVector() const;
   /// The exact mean H^-1 b (sparse Cholesky), without changing the filter.
   Eigen::VectorXd exactMean() const;

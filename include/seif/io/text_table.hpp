@@ -71,6 +71,7 @@ class TextTable {
   std::size_t pos_ = 0;
   std::unique_ptr<std::ifstream> file_;  // file mode
   std::string buffer_;                   // the current line in file mode
+  std::size_t consumed_ = 0;             // bytes read in file mode
   long line_ = 0;
   std::size_t count_ = 0;
   std::array<std::string_view, kMaxFields> fields_{};
