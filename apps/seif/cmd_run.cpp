@@ -19,6 +19,7 @@ struct RunArgs {
   NoiseFlags noise;
   SeifFlags seif;
   double outlier_gate = FilterConfig{}.outlier_gate;
+  std::string map_covariance = "exact";
   std::string command_line;
 };
 
@@ -39,6 +40,7 @@ void run(const RunArgs& args) {
   request.filter = args.filter;
   request.outlier_gate = args.outlier_gate;
   request.seif = args.seif.resolve();
+  request.map_covariances = args.map_covariance == "exact";
   request.command_line = args.command_line;
   RunReport r;
   {
@@ -115,6 +117,12 @@ void addRunCommand(CLI::App& app) {
         if (!CLI::detail::lexical_cast(s, v) || !(v > 0.0)) return "must be > 0 (or inf), found " + s;
         return {};
       })
+      ->capture_default_str();
+  cmd->add_option("--map-covariance", args->map_covariance,
+                  "exact: map.csv carries each landmark's exact marginal covariance (for the SEIF, "
+                  "one sparse factorisation of H at the end: at 10^6 landmarks it needs more memory "
+                  "than the filter); none: id,x,y only")
+      ->check(CLI::IsMember({"exact", "none"}))
       ->capture_default_str();
   args->noise.add(*cmd);
   args->seif.add(*cmd);

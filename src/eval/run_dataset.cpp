@@ -57,6 +57,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"seconds", out.seconds},
       {"seconds_wall", r.seconds_wall},
       {"seconds_trajectory_and_map", r.seconds_outputs},
+      {"map_covariances", request.map_covariances},
       {"us_per_step", out.steps == 0 ? 0.0 : 1e6 * out.seconds / steps},
       {"us_per_step_median", sorted.empty() ? 0.0 : 1e6 * sorted[sorted.size() / 2]},
       {"links", out.final_stats.links},
@@ -136,7 +137,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   const auto write_start = Clock::now();
   writeTum(out / "trajectory.tum", report.output.trajectory);
   writeTum(out / "dead_reckoning.tum", report.output.dead_reckoning);
-  writeMapCsv(out / "map.csv", *filter);  // the marginal covariances are computed here
+  writeMapCsv(out / "map.csv", *filter, request.map_covariances);  // marginals computed here
   report.seconds_outputs = secondsSince(write_start);
   writeFileAtomically(out / "metrics.json", metricsJson(request, report));
   return report;

@@ -18,11 +18,15 @@ void writeTum(const std::filesystem::path& file, const std::vector<TimedPose>& t
   f.commit();
 }
 
-void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter) {
+void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter, bool covariances) {
   AtomicFile f(file);
-  std::fprintf(f.get(), "id,x,y,cov_xx,cov_xy,cov_yy\n");
+  std::fprintf(f.get(), covariances ? "id,x,y,cov_xx,cov_xy,cov_yy\n" : "id,x,y\n");
   for (int id : filter.landmarkIds()) {
     const Vec2 y = filter.landmark(id);
+    if (!covariances) {
+      std::fprintf(f.get(), "%d,%.9g,%.9g\n", id, y.x(), y.y());
+      continue;
+    }
     const Mat2 P = filter.landmarkCovariance(id);
     std::fprintf(f.get(), "%d,%.9g,%.9g,%.9g,%.9g,%.9g\n", id, y.x(), y.y(), P(0, 0), P(0, 1),
                  P(1, 1));

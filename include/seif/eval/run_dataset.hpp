@@ -27,7 +27,8 @@ struct RunRequest {
   std::string filter = "seif";  ///< "ekf" | "eif" | "seif"
   double outlier_gate = FilterConfig{}.outlier_gate;
   SeifOptions seif;
-  std::string command_line;  ///< recorded in metrics.json
+  bool map_covariances = true;  ///< map.csv with each landmark's exact marginal covariance
+  std::string command_line;     ///< recorded in metrics.json
 };
 
 struct RunErrors {

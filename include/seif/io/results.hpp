@@ -13,7 +13,9 @@ namespace seif {
 /// "timestamp tx ty tz qx qy qz qw" per line; z = 0 and the quaternion is the yaw rotation.
 void writeTum(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory);
 
-/// Header "id,x,y,cov_xx,cov_xy,cov_yy", one row per mapped landmark in map order.
-void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter);
+/// Header "id,x,y,cov_xx,cov_xy,cov_yy", one row per mapped landmark in map order; without
+/// `covariances`, "id,x,y" (the marginals cost the SEIF a sparse factorisation: memory
+/// beyond the filter's at 10^6 landmarks, README "Scale").
+void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter, bool covariances = true);
 
 }  // namespace seif
