@@ -1,15 +1,15 @@
 #pragma once
-// The Sparse Extended Information Filter (Thrun et al. 2002; algorithm.md §1-4).
-// H and b live in a block-sparse store: per landmark its 2x2 diagonal block, its links to
-// other landmarks, and the robot's links to the active landmarks. One step touches only the
-// robot, the active landmarks and K relaxed landmarks, so its cost does not grow with the map:
+// The Sparse Extended Information Filter (Thrun et al. 2002; algorithm.md §1-4): the
+// paper's four steps on the block-sparse store of H, b and mu (SeifStore). One step touches
+// only the robot, the active landmarks and K relaxed landmarks, so its cost does not grow
+// with the map:
 //   predict(u)  : motion update on the {robot, active} block (paper Lemma 3);
 //   update(z)   : mean recovery (amortised coordinate descent, eq. 42), measurement update
 //                 (Lemma 1, eq. 21-22), sparsification (eq. 44-51) when more than
 //                 max_active landmarks are active.
 #include <seif/filters/information_ops.hpp>
-#include <seif/filters/landmark_index.hpp>
 #include <seif/filters/outlier_gate.hpp>
+#include <seif/filters/seif_store.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/SparseCore>
@@ -70,14 +70,14 @@ class SeifSlam final : public SlamFilter {
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
-  const std::vector<int>& landmarkIds() const override { return index_.ids(); }
-  bool hasLandmark(int id) const override { return index_.find(id) >= 0; }
+  const std::vector<int>& landmarkIds() const override { return store_.index().ids(); }
+  bool hasLandmark(int id) const override { return store_.index().find(id) >= 0; }
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
   FilterStats stats() const override;
-  std::size_t robotLinks() const override { return robot_links_.size(); }
+  std::size_t robotLinks() const override { return store_.robotLinks().size(); }
   std::size_t rejectedObservations() const override { return gate_.rejected(); }
-  std::size_t blocksTouched() const override { return blocks_touched_; }
+  std::size_t blocksTouched() const override { return store_.blocksTouched(); }
 
   Eigen::VectorXd mean() const override;
   Eigen::MatrixXd covariance() const override;
@@ -96,11 +96,12 @@ class SeifSlam final : public SlamFilter {
   void sparsify();                                         ///< §4, eq. (44-51)
 
   const SeifOptions& options() const { return options_; }
+  const SeifStore& store() const { return store_; }
   /// H as a sparse matrix and b, in the state order [x, y, th, landmarks...].
-  Eigen::SparseMatrix<double> sparseInformation() const;
-  /// Its lower triangle (what a sparse Cholesky factorisation reads), built without triplets.
-  Eigen::SparseMatrix<double> lowerInformation() const;
-  Eigen::VectorXd informationVector() const;
+  Eigen::SparseMatrix<double> sparseInformation() const { return store_.sparseInformation(); }
+  /// Its lower triangle, what the factorisation reads (SeifStore::lowerInformation).
+  Eigen::SparseMatrix<double> lowerInformation() const { return store_.lowerInformation(); }
+  Eigen::VectorXd informationVector() const { return store_.informationVector(); }
   /// The exact mean H^-1 b (sparse Cholesky), without changing the filter.
   Eigen::VectorXd exactMean() const;
   /// Runs `sweeps` full Gauss-Seidel sweeps of the mean over every variable.
@@ -112,65 +113,22 @@ class SeifSlam final : public SlamFilter {
   double lastSparsificationResidual() const { return last_sparsification_residual_; }
 
  protected:
-  Pose2 linearizationPose() const override { return mu_x_; }
+  Pose2 linearizationPose() const override { return store_.robotMean(); }
 
  private:
-  struct Link {
-    int slot;
-    Mat2 H;  // H_{this, other}
-  };
-  struct RobotLink {
-    int slot;
-    Mat32 H;  // H_{x, landmark}
-    long last_seen;
-  };
-  struct Node {
-    Mat2 H = Mat2::Zero();
-    Vec2 b = Vec2::Zero();
-    Vec2 mu = Vec2::Zero();
-    int active = -1;  // position in robot_links_, or -1 when passive
-    std::vector<Link> links;
-  };
-
-  Mat2* findLink(int a, int c);
-  void addToLink(int a, int c, const Mat2& H_ac);
-  void relaxRobot();
-  void relaxLandmark(int slot);
-  /// Gathers the robot and the active landmarks and solves their means jointly.
-  void relaxActiveBlock();
-  /// The joint solve on the block already gathered (eq. 42 on {x, active}).
-  void solveGatheredMean();
-  /// sparsify(), optionally solving the gathered block's mean before eq. (44-51).
+  /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).
   void deactivateSurplus(bool solve_active_mean_first);
-  /// Gathers H, b, mu of the robot and the active landmarks listed in `order`
-  /// (landmark slots) into the local buffers, and scatters them back.
-  void gather(const std::vector<int>& order);
-  void scatter(const std::vector<int>& order);
-  void removeRobotLink(int slot);
   void invalidateFactor();
 
   FilterConfig config_;
   OutlierGate gate_;
   SeifOptions options_;
-  LandmarkIndex index_;
-  Mat3 H_xx_;
-  Vec3 b_x_;
-  Vec3 mu_x_;
-  std::vector<RobotLink> robot_links_;
-  std::vector<Node> nodes_;
+  SeifStore store_;
   std::mt19937_64 rng_;
-  long step_ = 0;
   std::size_t relax_cursor_ = 0;  // next landmark of a cyclic relaxation
-  std::size_t blocks_touched_ = 0;
-  std::size_t landmark_links_ = 0;      // landmark-landmark links (unordered pairs)
-  std::size_t max_landmark_links_ = 0;  // most links any landmark has had
   double last_sparsification_residual_ = 0.0;
 
   // Work buffers, reused every step (no allocation in the steady state).
-  LocalMatrix local_H_;
-  LocalVector local_b_;
-  LocalVector local_mu_;
-  LocalVector local_rhs_;
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxLocalDim> workspace_;
   std::vector<int> order_;
   std::vector<std::pair<double, int>> ranking_;

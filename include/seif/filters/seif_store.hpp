@@ -1,0 +1,148 @@
+#pragma once
+// The SEIF's block-sparse store of the information matrix H, the information vector b and
+// the mean mu (Thrun et al. 2002, §3; algorithm.md): the robot's 3x3 block, per landmark its
+// 2x2 block and its links to other landmarks, and the robot's links to the active landmarks.
+// The filter's steps work on a small dense block gathered from it (the robot and listed
+// landmarks, at most kMaxLocalLandmarks) and scattered back; the amortised mean relaxes one
+// variable at a time on it (eq. 42). Only new landmarks and new links allocate.
+#include <seif/filters/information_ops.hpp>
+#include <seif/filters/landmark_index.hpp>
+#include <seif/filters/slam_filter.hpp>
+
+#include <Eigen/SparseCore>
+#include <cstddef>
+#include <span>
+#include <vector>
+
+namespace seif {
+
+class SeifStore {
+ public:
+  struct Link {
+    int slot;
+    Mat2 H;  // H_{this, other}
+  };
+  struct RobotLink {
+    int slot;
+    Mat32 H;         // H_{x, landmark}
+    long last_seen;  // step() of its last observation
+  };
+  struct Node {
+    Mat2 H = Mat2::Zero();
+    Vec2 b = Vec2::Zero();
+    Vec2 mu = Vec2::Zero();
+    int active = -1;  // position in robotLinks(), or -1 when passive
+    std::vector<Link> links;
+  };
+
+  /// A map without landmarks: the robot's information H_xx at mean mu_x (b_x = H_xx mu_x).
+  SeifStore(const Mat3& H_xx, const Vec3& mu_x);
+
+  // ---- reading
+  const LandmarkIndex& index() const { return index_; }
+  int size() const { return index_.size(); }
+  const Mat3& robotInformation() const { return H_xx_; }
+  const Vec3& robotVector() const { return b_x_; }
+  const Vec3& robotMean() const { return mu_x_; }
+  const Node& node(int slot) const { return nodes_[static_cast<std::size_t>(slot)]; }
+  /// The active landmarks, in no particular order (removeRobotLink() swaps in the last).
+  const std::vector<RobotLink>& robotLinks() const { return robot_links_; }
+  /// H_{a,c} of two landmark slots, or nullptr when they are not linked.
+  const Mat2* findLink(int a, int c) const;
+  /// H as a sparse matrix, b and mu, in the state order [x, y, th, landmarks...].
+  Eigen::SparseMatrix<double> sparseInformation() const;
+  /// Its lower triangle (what a sparse Cholesky factorisation reads), built in place in
+  /// compressed columns without triplets: the one copy of H a factorisation needs.
+  Eigen::SparseMatrix<double> lowerInformation() const;
+  Eigen::VectorXd informationVector() const;
+  Eigen::VectorXd mean() const;
+
+  // ---- steps and counters
+  /// Starts a filter step: counts it (RobotLink::last_seen, error messages) and zeroes
+  /// blocksTouched().
+  void beginStep() {
+    ++step_;
+    blocks_touched_ = 0;
+  }
+  long step() const { return step_; }
+  /// H blocks read or written since beginStep().
+  std::size_t blocksTouched() const { return blocks_touched_; }
+  /// O(1): landmarks, robot links, links (robot + landmark pairs), most links any landmark
+  /// has had, blocks touched.
+  FilterStats stats() const;
+
+  // ---- writing
+  /// Adds landmark `id` (new to the index), without information, at mean mu; its slot.
+  int addLandmark(int id, const Vec2& mu);
+  /// Adds one observation's information over [robot (3), landmark `slot` (2)] (eq. 21-22),
+  /// linking the landmark to the robot (activating it) and marking it seen at step().
+  void addObservation(int slot, const Eigen::Matrix<double, 5, 5>& H,
+                      const Eigen::Matrix<double, 5, 1>& b);
+  /// H_{a,c} += H_ac and H_{c,a} += H_ac^T, creating the link if needed.
+  void addToLink(int a, int c, const Mat2& H_ac);
+  /// Deactivates landmark `slot`: drops its robot link (the last one takes its place).
+  void removeRobotLink(int slot);
+  /// Sets the whole mean, in the state order.
+  void setMean(const Eigen::VectorXd& mu);
+
+  // ---- the local dense block
+  /// Gathers H, b, mu of the robot and the landmarks `slots` (at most kMaxLocalLandmarks),
+  /// in that order, into localH(), localB(), localMean(): [x (3), slots[0] (2), ...].
+  void gather(std::span<const int> slots);
+  /// gather() of the robot and the active landmarks, in robotLinks() order.
+  void gatherActive();
+  /// Writes the gathered block back: H, b, mu, the robot links of active landmarks, and
+  /// links among the landmarks (creating those that became non-zero: motion, paper fig. 4).
+  void scatter();
+  std::span<const int> gathered() const { return gathered_; }
+  LocalMatrix& localH() { return local_H_; }
+  LocalVector& localB() { return local_b_; }
+  LocalVector& localMean() { return local_mu_; }
+
+  // ---- Gauss-Seidel relaxation of the mean, eq. (42): mu_i = H_ii^-1 (b_i - sum H_ij mu_j)
+  void relaxRobot();
+  void relaxLandmark(int slot);
+  /// Solves the gathered block's mean jointly, its links to the rest on the right-hand
+  /// side. The block must hold exactly the active landmarks (in any order): the robot's
+  /// links then all lie inside it, and the landmarks' links to passive ones outside.
+  void solveLocalMean();
+  /// gatherActive(); solveLocalMean().
+  void relaxActive() {
+    gatherActive();
+    solveLocalMean();
+  }
+  /// Starts fetching landmark `slot`'s node into the cache (round 1 of relaxLandmarks()).
+  void prefetch(int slot) const {
+    const char* p = reinterpret_cast<const char*>(&nodes_[static_cast<std::size_t>(slot)]);
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + sizeof(Node) - 1);
+  }
+  /// relaxLandmark() of each of `slots` (prefetched), in order. Each relaxation chases three
+  /// dependent pointers: node, links, neighbours' means. Their memory is prefetched first,
+  /// round by round, so that the cache misses of the slots overlap instead of adding up.
+  void relaxLandmarks(std::span<const int> slots);
+
+ private:
+  Mat2* link(int a, int c);
+  void gatherListed();  // gather() of gathered_
+
+  LandmarkIndex index_;
+  Mat3 H_xx_;
+  Vec3 b_x_;
+  Vec3 mu_x_;
+  std::vector<RobotLink> robot_links_;
+  std::vector<Node> nodes_;
+  long step_ = 0;
+  std::size_t blocks_touched_ = 0;
+  std::size_t landmark_links_ = 0;      // landmark-landmark links (unordered pairs)
+  std::size_t max_landmark_links_ = 0;  // most links any landmark has had
+
+  // The gathered block, reused every step (no allocation in the steady state).
+  std::vector<int> gathered_;
+  LocalMatrix local_H_;
+  LocalVector local_b_;
+  LocalVector local_mu_;
+  LocalVector local_rhs_;
+};
+
+}  // namespace seif

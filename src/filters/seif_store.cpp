@@ -1,0 +1,330 @@
+#include <seif/core/errors.hpp>
+#include <seif/filters/seif_store.hpp>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace seif {
+
+SeifStore::SeifStore(const Mat3& H_xx, const Vec3& mu_x) : H_xx_(H_xx), b_x_(H_xx * mu_x), mu_x_(mu_x) {
+  robot_links_.reserve(kMaxLocalLandmarks + 1);
+  gathered_.reserve(kMaxLocalLandmarks + 1);
+}
+
+// ---------------------------------------------------------------- links ---------------
+
+Mat2* SeifStore::link(int a, int c) {
+  for (Link& l : nodes_[static_cast<std::size_t>(a)].links) {
+    if (l.slot == c) return &l.H;
+  }
+  return nullptr;
+}
+
+const Mat2* SeifStore::findLink(int a, int c) const { return const_cast<SeifStore*>(this)->link(a, c); }
+
+void SeifStore::addToLink(int a, int c, const Mat2& H_ac) {
+  if (Mat2* h = link(a, c)) {
+    *h += H_ac;
+    *link(c, a) += H_ac.transpose();
+    return;
+  }
+  Node& na = nodes_[static_cast<std::size_t>(a)];
+  Node& nc = nodes_[static_cast<std::size_t>(c)];
+  na.links.push_back({c, H_ac});
+  nc.links.push_back({a, H_ac.transpose()});
+  ++landmark_links_;
+  max_landmark_links_ = std::max({max_landmark_links_, na.links.size() + (na.active >= 0 ? 1 : 0),
+                                  nc.links.size() + (nc.active >= 0 ? 1 : 0)});
+}
+
+int SeifStore::addLandmark(int id, const Vec2& mu) {
+  const int slot = index_.add(id);
+  nodes_.emplace_back();
+  nodes_.back().mu = mu;
+  return slot;
+}
+
+void SeifStore::addObservation(int slot, const Eigen::Matrix<double, 5, 5>& H,
+                               const Eigen::Matrix<double, 5, 1>& b) {
+  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  H_xx_ += H.topLeftCorner<3, 3>();
+  b_x_ += b.head<3>();
+  node.H += H.bottomRightCorner<2, 2>();
+  node.b += b.tail<2>();
+  if (node.active < 0) {  // observing a passive landmark activates it
+    node.active = static_cast<int>(robot_links_.size());
+    robot_links_.push_back({slot, Mat32::Zero(), step_});
+    max_landmark_links_ = std::max(max_landmark_links_, node.links.size() + 1);
+  }
+  RobotLink& l = robot_links_[static_cast<std::size_t>(node.active)];
+  l.H += H.topRightCorner<3, 2>();
+  l.last_seen = step_;
+  blocks_touched_ += 3;
+}
+
+void SeifStore::removeRobotLink(int slot) {
+  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  const std::size_t pos = static_cast<std::size_t>(node.active);
+  node.active = -1;
+  if (pos + 1 != robot_links_.size()) {
+    robot_links_[pos] = robot_links_.back();
+    nodes_[static_cast<std::size_t>(robot_links_[pos].slot)].active = static_cast<int>(pos);
+  }
+  robot_links_.pop_back();
+}
+
+void SeifStore::setMean(const Eigen::VectorXd& mu) {
+  mu_x_ = mu.head<3>();
+  for (int s = 0; s < size(); ++s) nodes_[static_cast<std::size_t>(s)].mu = mu.segment<2>(LandmarkIndex::stateIndex(s));
+}
+
+// ---------------------------------------------------------------- the local block ------
+
+void SeifStore::gather(std::span<const int> slots) {
+  gathered_.assign(slots.begin(), slots.end());
+  gatherListed();
+}
+
+void SeifStore::gatherActive() {
+  gathered_.clear();
+  for (const RobotLink& l : robot_links_) gathered_.push_back(l.slot);
+  gatherListed();
+}
+
+void SeifStore::gatherListed() {
+  const int k = static_cast<int>(gathered_.size());
+  if (k > kMaxLocalLandmarks) {
+    throw std::invalid_argument("seif: a local block holds at most " + std::to_string(kMaxLocalLandmarks) +
+                                " landmarks");
+  }
+  const int n = 3 + 2 * k;
+  local_H_.setZero(n, n);
+  local_b_.resize(n);
+  local_mu_.resize(n);
+  local_H_.topLeftCorner<3, 3>() = H_xx_;
+  local_b_.head<3>() = b_x_;
+  local_mu_.head<3>() = mu_x_;
+  for (int i = 0; i < k; ++i) {
+    const int a = gathered_[static_cast<std::size_t>(i)];
+    const Node& n_a = node(a);
+    const int r = 3 + 2 * i;
+    local_H_.block<2, 2>(r, r) = n_a.H;
+    local_b_.segment<2>(r) = n_a.b;
+    local_mu_.segment<2>(r) = n_a.mu;
+    if (n_a.active >= 0) {
+      const Mat32& H_xl = robot_links_[static_cast<std::size_t>(n_a.active)].H;
+      local_H_.block<3, 2>(0, r) = H_xl;
+      local_H_.block<2, 3>(r, 0) = H_xl.transpose();
+    }
+    for (int j = i + 1; j < k; ++j) {
+      if (const Mat2* h = findLink(a, gathered_[static_cast<std::size_t>(j)])) {
+        const int c = 3 + 2 * j;
+        local_H_.block<2, 2>(r, c) = *h;
+        local_H_.block<2, 2>(c, r) = h->transpose();
+      }
+    }
+  }
+  blocks_touched_ += static_cast<std::size_t>((k + 1) * (k + 1));
+}
+
+void SeifStore::scatter() {
+  const int k = static_cast<int>(gathered_.size());
+  H_xx_ = local_H_.topLeftCorner<3, 3>();
+  b_x_ = local_b_.head<3>();
+  mu_x_ = local_mu_.head<3>();
+  for (int i = 0; i < k; ++i) {
+    const int a = gathered_[static_cast<std::size_t>(i)];
+    Node& node = nodes_[static_cast<std::size_t>(a)];
+    const int r = 3 + 2 * i;
+    node.H = local_H_.block<2, 2>(r, r);
+    node.b = local_b_.segment<2>(r);
+    node.mu = local_mu_.segment<2>(r);
+    if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
+    for (int j = i + 1; j < k; ++j) {
+      const int c = gathered_[static_cast<std::size_t>(j)];
+      const Mat2 block = local_H_.block<2, 2>(r, 3 + 2 * j);
+      if (Mat2* h = link(a, c)) {
+        *h = block;
+        *link(c, a) = block.transpose();
+      } else if (block.cwiseAbs().maxCoeff() > 0.0) {
+        addToLink(a, c, block);  // motion creates links among the active landmarks (paper fig. 4)
+      }
+    }
+  }
+  blocks_touched_ += static_cast<std::size_t>((k + 1) * (k + 1));
+}
+
+// ---------------------------------------------------------------- relaxation ----------
+
+void SeifStore::relaxRobot() {
+  // eq. (42): mu_x = H_xx^-1 (b_x - sum_l H_xl mu_l)
+  Vec3 rhs = b_x_;
+  for (const RobotLink& l : robot_links_) rhs.noalias() -= l.H * nodes_[static_cast<std::size_t>(l.slot)].mu;
+  Eigen::LLT<Mat3> llt(H_xx_);
+  if (llt.info() != Eigen::Success) {
+    throw NumericError("seif: robot information block is not positive definite at step " +
+                       std::to_string(step_));
+  }
+  mu_x_ = llt.solve(rhs);
+  blocks_touched_ += 1 + robot_links_.size();
+}
+
+void SeifStore::relaxLandmark(int slot) {
+  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  Vec2 rhs = node.b;
+  for (const Link& l : node.links) rhs.noalias() -= l.H * nodes_[static_cast<std::size_t>(l.slot)].mu;
+  if (node.active >= 0) {
+    rhs.noalias() -= robot_links_[static_cast<std::size_t>(node.active)].H.transpose() * mu_x_;
+  }
+  Eigen::LLT<Mat2> llt(node.H);
+  if (llt.info() != Eigen::Success) {
+    std::ostringstream msg;
+    msg << "seif: information of landmark " << index_.ids()[static_cast<std::size_t>(slot)]
+        << " is not positive definite at step " << step_;
+    throw NumericError(msg.str());
+  }
+  node.mu = llt.solve(rhs);
+  blocks_touched_ += 1 + node.links.size() + (node.active >= 0 ? 1 : 0);
+}
+
+void SeifStore::relaxLandmarks(std::span<const int> slots) {
+  for (int s : slots) {  // round 2: their links (round 1, the nodes: prefetch())
+    const std::vector<Link>& links = node(s).links;
+    const char* begin = reinterpret_cast<const char*>(links.data());
+    const char* end = reinterpret_cast<const char*>(links.data() + links.size());
+    for (const char* p = begin; p < end; p += 64) __builtin_prefetch(p);
+  }
+  for (int s : slots) {  // round 3: their neighbours' means
+    for (const Link& l : node(s).links) __builtin_prefetch(&node(l.slot).mu);
+  }
+  for (int s : slots) relaxLandmark(s);
+}
+
+void SeifStore::solveLocalMean() {
+  // Block Gauss-Seidel on the gathered variables L jointly (eq. 42 with S_i the projection
+  // onto L): mu_L = H_LL^-1 (b_L - H_{L,rest} mu_rest). With every active landmark in L the
+  // robot is linked only inside L; each landmark's links to passive ones go to the right.
+  local_rhs_ = local_b_;
+  for (std::size_t i = 0; i < gathered_.size(); ++i) {
+    const Node& n = node(gathered_[i]);
+    for (const Link& l : n.links) {
+      const Node& other = node(l.slot);
+      if (other.active < 0) local_rhs_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i)).noalias() -= l.H * other.mu;
+    }
+    blocks_touched_ += n.links.size();
+  }
+  Eigen::LLT<LocalMatrix> llt(local_H_);
+  if (llt.info() != Eigen::Success) {
+    throw NumericError("seif: the information of the robot and its active landmarks is not "
+                       "positive definite at step " + std::to_string(step_));
+  }
+  local_mu_ = llt.solve(local_rhs_);
+  mu_x_ = local_mu_.head<3>();
+  for (std::size_t i = 0; i < gathered_.size(); ++i) {
+    nodes_[static_cast<std::size_t>(gathered_[i])].mu = local_mu_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i));
+  }
+}
+
+// ---------------------------------------------------------------- reading out ---------
+
+Eigen::SparseMatrix<double> SeifStore::sparseInformation() const {
+  const int n = 3 + 2 * size();
+  std::vector<Eigen::Triplet<double>> t;
+  auto addBlock = [&t](int r, int c, const auto& B) {
+    for (int i = 0; i < B.rows(); ++i)
+      for (int j = 0; j < B.cols(); ++j) t.emplace_back(r + i, c + j, B(i, j));
+  };
+  addBlock(0, 0, H_xx_);
+  for (const RobotLink& l : robot_links_) {
+    const int c = LandmarkIndex::stateIndex(l.slot);
+    addBlock(0, c, l.H);
+    addBlock(c, 0, Mat23(l.H.transpose()));
+  }
+  for (int s = 0; s < size(); ++s) {
+    const Node& n_s = node(s);
+    const int r = LandmarkIndex::stateIndex(s);
+    addBlock(r, r, n_s.H);
+    for (const Link& l : n_s.links) addBlock(r, LandmarkIndex::stateIndex(l.slot), l.H);
+  }
+  Eigen::SparseMatrix<double> H(n, n);
+  H.setFromTriplets(t.begin(), t.end());
+  return H;
+}
+
+Eigen::SparseMatrix<double> SeifStore::lowerInformation() const {
+  // The lower triangle of H in compressed columns, written in place from the block store
+  // (no triplets): the one copy of H a factorisation needs, at a third of the peak memory.
+  const int n = 3 + 2 * size();
+  std::vector<int> count(static_cast<std::size_t>(n), 0);  // entries per column
+  count[0] = 3 + 2 * static_cast<int>(robot_links_.size());
+  count[1] = 2 + 2 * static_cast<int>(robot_links_.size());
+  count[2] = 1 + 2 * static_cast<int>(robot_links_.size());
+  for (int s = 0; s < static_cast<int>(nodes_.size()); ++s) {
+    int below = 0;
+    for (const Link& l : nodes_[static_cast<std::size_t>(s)].links) below += l.slot > s ? 2 : 0;
+    count[static_cast<std::size_t>(LandmarkIndex::stateIndex(s))] = 2 + below;
+    count[static_cast<std::size_t>(LandmarkIndex::stateIndex(s)) + 1] = 1 + below;
+  }
+  Eigen::SparseMatrix<double> H(n, n);
+  H.reserve(Eigen::Map<const Eigen::VectorXi>(count.data(), n));
+  std::vector<std::pair<int, const Mat2*>> below;  // a landmark's links to later slots, sorted
+  for (int c = 0; c < 3; ++c) {
+    for (int r = c; r < 3; ++r) H.insert(r, c) = H_xx_(r, c);
+  }
+  // Robot columns: rows of the active landmarks in any order (insert() keeps them sorted).
+  for (const RobotLink& l : robot_links_) {
+    const int r = LandmarkIndex::stateIndex(l.slot);
+    for (int c = 0; c < 3; ++c) {
+      H.insert(r, c) = l.H(c, 0);
+      H.insert(r + 1, c) = l.H(c, 1);
+    }
+  }
+  for (int s = 0; s < static_cast<int>(nodes_.size()); ++s) {
+    const Node& node = nodes_[static_cast<std::size_t>(s)];
+    const int c = LandmarkIndex::stateIndex(s);
+    below.clear();
+    for (const Link& l : node.links) {
+      if (l.slot > s) below.emplace_back(l.slot, &l.H);
+    }
+    std::sort(below.begin(), below.end());
+    for (int k = 0; k < 2; ++k) {
+      for (int r = k; r < 2; ++r) H.insert(c + r, c + k) = node.H(r, k);
+      for (const auto& [slot, block] : below) {
+        const int r = LandmarkIndex::stateIndex(slot);
+        H.insert(r, c + k) = (*block)(k, 0);  // H_{other, this} = H_{this, other}^T
+        H.insert(r + 1, c + k) = (*block)(k, 1);
+      }
+    }
+  }
+  H.makeCompressed();
+  return H;
+}
+
+Eigen::VectorXd SeifStore::informationVector() const {
+  Eigen::VectorXd b(3 + 2 * size());
+  b.head<3>() = b_x_;
+  for (int s = 0; s < size(); ++s) b.segment<2>(LandmarkIndex::stateIndex(s)) = node(s).b;
+  return b;
+}
+
+Eigen::VectorXd SeifStore::mean() const {
+  Eigen::VectorXd mu(3 + 2 * size());
+  mu.head<3>() = mu_x_;
+  for (int s = 0; s < size(); ++s) mu.segment<2>(LandmarkIndex::stateIndex(s)) = node(s).mu;
+  return mu;
+}
+
+FilterStats SeifStore::stats() const {
+  FilterStats s;
+  s.landmarks = nodes_.size();
+  s.robot_links = robot_links_.size();
+  s.links = s.robot_links + landmark_links_;
+  s.max_landmark_links = max_landmark_links_;
+  s.blocks_touched = blocks_touched_;
+  return s;
+}
+
+}  // namespace seif
