@@ -74,7 +74,7 @@ TEST(VictoriaPark, NoiseDefaultsAndOverridesSayWhereTheyCameFrom) {
   EXPECT_EQ(n["sigma_range"].value, 0.7);
   EXPECT_EQ(n["sigma_range"].source, "command line");
   EXPECT_EQ(n["sigma_speed"].source, "default for victoria-park");
-  EXPECT_EQ(n["sigma_speed"].unit, "m/s/sqrt(s)");
+  EXPECT_EQ(n["sigma_speed"].unit, "m/s*sqrt(s)");
   o.noise["sigma_v"] = 0.1;  // a velocity-model name: not this format's
   EXPECT_THROW(openVictoriaPark(f, o), std::invalid_argument);
 }

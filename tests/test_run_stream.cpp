@@ -166,3 +166,20 @@ TEST(GpsRmse, IsZeroForARigidlyMovedTrajectoryAndCountsTheFixesInside) {
 }
 
 }  // namespace
+
+namespace {
+TEST(StepAssembler, ObservationsAtTheFirstControlsStampAreKeptAsBuildDatasetKeepsThem) {
+  RobotLog log;
+  log.odometry = {{10.0, 1.0, 0.1}, {11.0, 2.0, 0.2}};
+  log.measurements = {{9.0, 7, 1.0, 0.0}, {10.0, 7, 2.0, 0.1}, {10.0, 8, 2.5, -0.2}, {10.5, 8, 1.0, 0.0}};
+  RobotLogSource source(log, NoiseModel{});
+  StepAssembler a;
+  std::vector<Step> steps;
+  Step s;
+  while (a.next(source, s, nullptr, nullptr)) steps.push_back(s);
+  expectSameSteps(steps, buildDataset(log).steps);
+  EXPECT_EQ(a.droppedBeforeFirstControl(), 1u);
+  ASSERT_FALSE(steps.empty());
+  EXPECT_EQ(steps[0].observations.size(), 2u);
+}
+}  // namespace

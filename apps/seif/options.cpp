@@ -93,9 +93,9 @@ void NoiseFlags::add(CLI::App& cmd) {
     const char* name;
     const char* help;
   } flags[] = {
-      {"--sigma-v", "sigma_v", "velocity model: forward-velocity noise [m/s, or m/s/sqrt(s) as a rate]"},
-      {"--sigma-w", "sigma_w", "velocity model: rotational-velocity noise [rad/s, or rad/s/sqrt(s) as a rate]"},
-      {"--sigma-speed", "sigma_speed", "Ackermann model: encoder speed noise [m/s, or m/s/sqrt(s) as a rate]"},
+      {"--sigma-v", "sigma_v", "velocity model: forward-velocity noise [m/s, or m/s*sqrt(s) as a rate]"},
+      {"--sigma-w", "sigma_w", "velocity model: rotational-velocity noise [rad/s, or rad/s*sqrt(s) as a rate]"},
+      {"--sigma-speed", "sigma_speed", "Ackermann model: encoder speed noise [m/s, or m/s*sqrt(s) as a rate]"},
       {"--sigma-steering", "sigma_steering", "Ackermann model: steering noise [rad, or rad*sqrt(s) as a rate]"},
       {"--sigma-range", "sigma_range", "range-bearing sensor: range noise [m]"},
       {"--sigma-bearing", "sigma_bearing", "range-bearing sensor: bearing noise [rad]"}};

@@ -114,6 +114,19 @@ bool StepAssembler::next(EventSource& source, Step& step, std::vector<TimedPose>
       started_ = true;
       control_ = c->input;
       has_control_ = true;
+      if (early_) {  // observations at the first control's stamp: a step of dt = 0
+        const bool same = early_->time == t;
+        if (!same) dropped_before_first_control_ += early_->observations.size();
+        std::optional<ObservationEvent> first = std::move(early_);
+        early_.reset();
+        now_ = t;
+        if (same) {
+          setRateStep(step, t);
+          step.observations = std::move(first->observations);
+          return true;
+        }
+        continue;
+      }
       now_ = t;
     } else {
       auto& obs = std::get<ObservationEvent>(e);
@@ -131,7 +144,9 @@ bool StepAssembler::next(EventSource& source, Step& step, std::vector<TimedPose>
       }
       if (!has_control_) {
         if (dynamic_cast<const OdometryModel*>(source.info().motion.get()) == nullptr) {
-          dropped_before_first_control_ += obs.observations.size();
+          // Before the first control; kept if that control starts at this very stamp.
+          if (early_) dropped_before_first_control_ += early_->observations.size();
+          early_ = std::move(obs);
           continue;
         }
         started_ = true;  // observations from the start pose of an odometry chain

@@ -98,8 +98,8 @@ class MrclamSource final : public EventSource {
       d.sigma_w *= std::sqrt(kMrclamOdometryPeriod);
     }
     const auto from = [&](double NoiseModel::*m) { return file ? std::optional<double>((*file).*m) : std::nullopt; };
-    const double sv = resolveNoise(info_, options, "sigma_v", rate ? "m/s/sqrt(s)" : "m/s", from(&NoiseModel::sigma_v), meta_name, d.sigma_v);
-    const double sw = resolveNoise(info_, options, "sigma_w", rate ? "rad/s/sqrt(s)" : "rad/s", from(&NoiseModel::sigma_w), meta_name, d.sigma_w);
+    const double sv = resolveNoise(info_, options, "sigma_v", rate ? "m/s*sqrt(s)" : "m/s", from(&NoiseModel::sigma_v), meta_name, d.sigma_v);
+    const double sw = resolveNoise(info_, options, "sigma_w", rate ? "rad/s*sqrt(s)" : "rad/s", from(&NoiseModel::sigma_w), meta_name, d.sigma_w);
     const double sr = resolveNoise(info_, options, "sigma_range", "m", from(&NoiseModel::sigma_range), meta_name, d.sigma_range);
     const double sb = resolveNoise(info_, options, "sigma_bearing", "rad", from(&NoiseModel::sigma_bearing), meta_name, d.sigma_bearing);
     info_.motion = std::make_shared<VelocityModel>(sv, sw, form);

@@ -44,7 +44,7 @@ class VictoriaParkSource final : public EventSource {
     info_.format = "victoria-park";
     const NoiseForm form = options.noise_form.value_or(NoiseForm::Rate);
     const bool rate = form == NoiseForm::Rate;
-    const double s_speed = resolveNoise(info_, options, "sigma_speed", rate ? "m/s/sqrt(s)" : "m/s", {}, "", kSigmaSpeed);
+    const double s_speed = resolveNoise(info_, options, "sigma_speed", rate ? "m/s*sqrt(s)" : "m/s", {}, "", kSigmaSpeed);
     const double s_steer = resolveNoise(info_, options, "sigma_steering", rate ? "rad*sqrt(s)" : "rad", {}, "", kSigmaSteering);
     const double s_range = resolveNoise(info_, options, "sigma_range", "m", {}, "", kSigmaRange);
     const double s_bearing = resolveNoise(info_, options, "sigma_bearing", "rad", {}, "", kSigmaBearing);

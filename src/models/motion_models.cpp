@@ -67,7 +67,7 @@ VelocityModel::VelocityModel(double sigma_v, double sigma_w, NoiseForm form)
 
 std::string VelocityModel::describe() const {
   std::ostringstream s;
-  const char* unit = form_ == NoiseForm::Rate ? "/sqrt(s)" : " per step";
+  const char* unit = form_ == NoiseForm::Rate ? "*sqrt(s)" : " per step";
   s << "velocity (v, w): sigma_v " << sigma_v_ << " m/s" << unit << ", sigma_w " << sigma_w_
     << " rad/s" << unit << " (" << noiseFormName(form_) << " noise)";
   return s.str();
@@ -101,7 +101,7 @@ AckermannModel::AckermannModel(const AckermannGeometry& geometry, double sigma_s
 
 std::string AckermannModel::describe() const {
   std::ostringstream s;
-  const char* unit = form_ == NoiseForm::Rate ? "/sqrt(s)" : " per step";
+  const char* unit = form_ == NoiseForm::Rate ? "*sqrt(s)" : " per step";
   s << "Ackermann (encoder speed, steering): L " << geometry_.wheelbase << " m, H "
     << geometry_.encoder_offset << " m, state at (" << geometry_.tracked_point.x() << ", "
     << geometry_.tracked_point.y() << ") m from the rear axle, sigma_speed " << sigma_speed_ << " m/s" << unit

@@ -39,7 +39,8 @@ struct RunOutput {
 /// a control stamp after the last step closes an interval without observations. An
 /// odometry increment is one step ending at its stamp; observations with the same stamp
 /// join that step, observations before any increment get a zero-motion step. Observations
-/// before the first rate control are dropped and counted ("before_first_control").
+/// before the first rate control are dropped and counted ("before_first_control"), those at
+/// its very stamp form a step of dt = 0 (as buildDataset()).
 /// Ground truth and GPS are handed on as they come.
 class StepAssembler {
  public:
@@ -59,6 +60,7 @@ class StepAssembler {
   MotionInput control_;  // the rate control in force, when has_control_
   bool has_control_ = false;
   std::optional<Step> pending_;         // an odometry step waiting for its observations
+  std::optional<ObservationEvent> early_;  // observations before the first rate control
   bool started_ = false;
   double now_ = 0.0;  // time the last emitted step ended
   double start_time_ = 0.0;

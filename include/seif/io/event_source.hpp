@@ -25,7 +25,7 @@ namespace seif {
 struct NoiseSetting {
   std::string name;   ///< e.g. "sigma_v"
   double value = 0.0;
-  std::string unit;   ///< e.g. "m/s/sqrt(s)"
+  std::string unit;   ///< e.g. "m/s*sqrt(s)"
   std::string source;
 };
 

@@ -4,7 +4,7 @@
 // U = V M' V^T with V = dDelta/d(v, w), in one of two forms:
 //   PerStep: M' = M for every input, whatever its dt - the paper's experiment, whose steps
 //            all last dt = 1 (Thrun et al. 2002; `seif paper`, `seif simulate` worlds);
-//   Rate:    M' = M / dt: sigma_v [m/s/sqrt(s)] and sigma_w [rad/s/sqrt(s)] are noise
+//   Rate:    M' = M / dt: sigma_v [m/s*sqrt(s)] and sigma_w [rad/s*sqrt(s)] are noise
 //            densities, so U grows like dt and splitting an interval at a measurement stamp
 //            injects the same noise as not splitting it (real logs: MRCLAM).
 #include <seif/core/types.hpp>
