@@ -8,6 +8,8 @@
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include "numeric_jacobian.hpp"
+
 #include <numbers>
 #include <random>
 
@@ -15,24 +17,6 @@ namespace {
 
 using namespace seif;
 constexpr double kPi = std::numbers::pi;
-constexpr double kStep = 1e-6;
-
-// Central difference of f: R^n -> R^m at x; angle outputs wrapped so that a difference
-// across the +-pi seam stays small.
-template <int M, int N, typename F>
-Eigen::Matrix<double, M, N> numericJacobian(F f, const Eigen::Matrix<double, N, 1>& x,
-                                            int wrapped_row = -1) {
-  Eigen::Matrix<double, M, N> J;
-  for (int i = 0; i < N; ++i) {
-    Eigen::Matrix<double, N, 1> xp = x, xm = x;
-    xp(i) += kStep;
-    xm(i) -= kStep;
-    Eigen::Matrix<double, M, 1> d = f(xp) - f(xm);
-    if (wrapped_row >= 0) d(wrapped_row) = wrapAngle(d(wrapped_row));
-    J.col(i) = d / (2 * kStep);
-  }
-  return J;
-}
 
 void expectNear(const Eigen::MatrixXd& analytic, const Eigen::MatrixXd& numeric,
                 const std::string& what) {
@@ -49,8 +33,8 @@ void checkMotion(const Pose2& x, const VelocityControl& u) {
   auto fu = [&](const Eigen::Vector2d& vw) {
     return VelocityMotionModel::delta(x, {vw(0), vw(1), u.dt});
   };
-  expectNear(J_x, numericJacobian<3, 3>(fx, x), "J_delta_x");
-  expectNear(J_u, numericJacobian<3, 2>(fu, Eigen::Vector2d(u.v, u.w)), "J_delta_u");
+  expectNear(J_x, test::numericJacobian<3, 3>(fx, x), "J_delta_x");
+  expectNear(J_u, test::numericJacobian<3, 2>(fu, Eigen::Vector2d(u.v, u.w)), "J_delta_u");
 }
 
 void checkMeasurement(const Pose2& x, const Vec2& y) {
@@ -59,8 +43,8 @@ void checkMeasurement(const Pose2& x, const Vec2& y) {
   RangeBearingModel(1.0, 1.0).predict(x, y, &J_x, &J_y);
   auto fx = [&](const Vec3& xx) { return RangeBearingModel(1.0, 1.0).predict(xx, y); };
   auto fy = [&](const Vec2& yy) { return RangeBearingModel(1.0, 1.0).predict(x, yy); };
-  expectNear(J_x, numericJacobian<2, 3>(fx, x, 1), "J_z_x");
-  expectNear(J_y, numericJacobian<2, 2>(fy, y, 1), "J_z_y");
+  expectNear(J_x, test::numericJacobian<2, 3>(fx, x, 1), "J_z_x");
+  expectNear(J_y, test::numericJacobian<2, 2>(fy, y, 1), "J_z_y");
 }
 
 void checkInverse(const Pose2& x, const Vec2& z) {
@@ -69,8 +53,8 @@ void checkInverse(const Pose2& x, const Vec2& z) {
   RangeBearingModel(1.0, 1.0).inverse(x, z, &J_x, &J_z);
   auto fx = [&](const Vec3& xx) { return RangeBearingModel(1.0, 1.0).inverse(xx, z); };
   auto fz = [&](const Vec2& zz) { return RangeBearingModel(1.0, 1.0).inverse(x, zz); };
-  expectNear(J_x, numericJacobian<2, 3>(fx, x), "J_y_x");
-  expectNear(J_z, numericJacobian<2, 2>(fz, z), "J_y_z");
+  expectNear(J_x, test::numericJacobian<2, 3>(fx, x), "J_y_x");
+  expectNear(J_z, test::numericJacobian<2, 2>(fz, z), "J_y_z");
 }
 
 }  // namespace

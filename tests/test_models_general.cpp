@@ -14,6 +14,8 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
+#include "numeric_jacobian.hpp"
+
 #include <functional>
 #include <numbers>
 #include <random>
@@ -23,20 +25,9 @@ namespace {
 using namespace seif;
 constexpr double kPi = std::numbers::pi;
 
-template <int M, int N>
-Eigen::Matrix<double, M, N> numeric(const std::function<Eigen::Matrix<double, M, 1>(const Eigen::Matrix<double, N, 1>&)>& f,
-                                    const Eigen::Matrix<double, N, 1>& x, int wrapped_row = -1) {
-  constexpr double h = 1e-6;
-  Eigen::Matrix<double, M, N> J;
-  for (int i = 0; i < N; ++i) {
-    Eigen::Matrix<double, N, 1> xp = x, xm = x;
-    xp(i) += h;
-    xm(i) -= h;
-    Eigen::Matrix<double, M, 1> d = f(xp) - f(xm);
-    if (wrapped_row >= 0) d(wrapped_row) = wrapAngle(d(wrapped_row));
-    J.col(i) = d / (2 * h);
-  }
-  return J;
+template <int M, int N, typename F>
+Eigen::Matrix<double, M, N> numeric(F f, const Eigen::Matrix<double, N, 1>& x, int wrapped_row = -1) {
+  return test::numericJacobian<M, N>(f, x, wrapped_row);
 }
 
 ::testing::AssertionResult near(const Eigen::MatrixXd& a, const Eigen::MatrixXd& n) {

@@ -15,8 +15,9 @@ namespace {
 
 using namespace seif;
 
-std::vector<Step> assemble(EventSource& source, std::vector<TimedPose>* gt = nullptr) {
-  StepAssembler a;
+std::vector<Step> assemble(EventSource& source, std::vector<TimedPose>* gt = nullptr, StepAssembler* used = nullptr) {
+  StepAssembler own;
+  StepAssembler& a = used ? *used : own;
   std::vector<Step> steps;
   Step s;
   while (a.next(source, s, gt, nullptr)) steps.push_back(s);
@@ -58,10 +59,7 @@ TEST(StepAssembler, SplitsAControlIntervalAtObservationStampsAndDropsEarlyOnes) 
                       {12.5, 8, 1.0, 0.0}};
   RobotLogSource source(log, NoiseModel{});
   StepAssembler a;
-  std::vector<Step> steps;
-  Step s;
-  while (a.next(source, s, nullptr, nullptr)) steps.push_back(s);
-  expectSameSteps(steps, buildDataset(log).steps);
+  expectSameSteps(assemble(source, nullptr, &a), buildDataset(log).steps);
   EXPECT_EQ(a.droppedBeforeFirstControl(), 1u);
   EXPECT_EQ(a.startTime(), 10.0);
 }
@@ -174,9 +172,7 @@ TEST(StepAssembler, ObservationsAtTheFirstControlsStampAreKeptAsBuildDatasetKeep
   log.measurements = {{9.0, 7, 1.0, 0.0}, {10.0, 7, 2.0, 0.1}, {10.0, 8, 2.5, -0.2}, {10.5, 8, 1.0, 0.0}};
   RobotLogSource source(log, NoiseModel{});
   StepAssembler a;
-  std::vector<Step> steps;
-  Step s;
-  while (a.next(source, s, nullptr, nullptr)) steps.push_back(s);
+  const std::vector<Step> steps = assemble(source, nullptr, &a);
   expectSameSteps(steps, buildDataset(log).steps);
   EXPECT_EQ(a.droppedBeforeFirstControl(), 1u);
   ASSERT_FALSE(steps.empty());

@@ -1,6 +1,7 @@
 #include "options.hpp"
 
 #include <seif/core/errors.hpp>
+#include <seif/eval/run_dataset.hpp>
 #include <seif/filters/information_ops.hpp>
 #include <seif/io/atomic_file.hpp>
 
@@ -168,15 +169,7 @@ nlohmann::json toJson(const NoiseModel& n) {
           {"sigma_bearing", n.sigma_bearing}};
 }
 
-nlohmann::json toJson(const SeifOptions& o) {
-  return {{"active", o.max_active},
-          {"relax", o.relax},
-          {"mean", o.mean == SeifOptions::Mean::Exact ? "exact" : "amortized"},
-          {"deactivate", o.deactivate == SeifOptions::Deactivate::Oldest ? "oldest" : "weakest"},
-          {"recovery", o.recovery == SeifOptions::Recovery::BeforeMeasurement ? "before-update" : "after-update"},
-          {"relax_order", o.relax_order == SeifOptions::RelaxOrder::Cyclic ? "cyclic" : "random"},
-          {"seed", o.seed}};
-}
+nlohmann::json toJson(const SeifOptions& o) { return nlohmann::json::parse(seifOptionsJson(o)); }
 
 nlohmann::json toJson(const FilterStats& s) {
   return {{"landmarks", s.landmarks},

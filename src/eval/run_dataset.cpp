@@ -20,7 +20,7 @@ double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(
 
 nlohmann::json optionalJson(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
 
-nlohmann::json seifOptionsJson(const SeifOptions& o) {
+nlohmann::json seifOptionsObject(const SeifOptions& o) {
   return {{"active", o.max_active},
           {"relax", o.relax},
           {"mean", o.mean == SeifOptions::Mean::Exact ? "exact" : "amortized"},
@@ -81,11 +81,13 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"dropped", dropped},
   };
   if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
-  if (request.filter == "seif") j["seif"] = seifOptionsJson(request.seif);
+  if (request.filter == "seif") j["seif"] = seifOptionsObject(request.seif);
   return j.dump(2) + "\n";
 }
 
 }  // namespace
+
+std::string seifOptionsJson(const SeifOptions& o) { return seifOptionsObject(o).dump(); }
 
 std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const std::vector<GpsFix>& gps,
                               std::size_t* compared) {

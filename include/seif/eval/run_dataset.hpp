@@ -59,6 +59,9 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
 std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const std::vector<GpsFix>& gps,
                               std::size_t* compared = nullptr);
 
+/// The SEIF's options as a JSON object (metrics.json "seif", `seif bench` and `seif paper`).
+std::string seifOptionsJson(const SeifOptions& options);
+
 /// The errors of a finished run (see the top of this file).
 RunErrors evaluateRun(const SlamFilter& filter, const DatasetInfo& info, const RunOutput& out);
 
