@@ -206,7 +206,7 @@ std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start, co
 }
 
 double alignedRmse(const std::vector<Vec2>& estimate, const std::vector<Vec2>& truth,
-                   Alignment alignment) {
+                   Alignment alignment, std::vector<double>* residuals) {
   const std::size_t n = estimate.size();
   if (n == 0 || n != truth.size()) throw std::invalid_argument("alignedRmse: point sets differ in size");
   Eigen::Matrix2d R = Eigen::Matrix2d::Identity();
@@ -231,7 +231,12 @@ double alignedRmse(const std::vector<Vec2>& estimate, const std::vector<Vec2>& t
     t = ct - R * ce;
   }
   double sum = 0.0;
-  for (std::size_t i = 0; i < n; ++i) sum += (R * estimate[i] + t - truth[i]).squaredNorm();
+  if (residuals) residuals->clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double e2 = (R * estimate[i] + t - truth[i]).squaredNorm();
+    sum += e2;
+    if (residuals) residuals->push_back(std::sqrt(e2));
+  }
   return std::sqrt(sum / static_cast<double>(n));
 }
 

@@ -76,6 +76,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"gps_rmse", optionalJson(r.errors.gps)},
       {"dead_reckoning_gps_rmse", optionalJson(r.errors.dead_reckoning_gps)},
       {"gps_fixes", r.errors.gps_fixes},
+      {"gps_median_error", optionalJson(r.errors.gps_median)},
       {"errors", "*_rmse: after the best rigid 2-D alignment to the reference (ground truth or GPS, "
                  "at its stamps); *_unaligned: as estimated, in the ground truth's frame"},
       {"dropped", dropped},
@@ -90,7 +91,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
 std::string seifOptionsJson(const SeifOptions& o) { return seifOptionsObject(o).dump(); }
 
 std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const std::vector<GpsFix>& gps,
-                              std::size_t* compared) {
+                              std::size_t* compared, std::optional<double>* median) {
   if (compared) *compared = 0;
   if (trajectory.empty()) return std::nullopt;
   const double t0 = trajectory.front().time, t1 = trajectory.back().time;
@@ -102,7 +103,13 @@ std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const st
   }
   if (compared) *compared = est.size();
   if (est.size() < 2) return std::nullopt;
-  return alignedRmse(est, ref, Alignment::Rigid);
+  std::vector<double> residuals;
+  const double rmse = alignedRmse(est, ref, Alignment::Rigid, &residuals);
+  if (median) {
+    std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
+    *median = residuals[residuals.size() / 2];
+  }
+  return rmse;
 }
 
 RunErrors evaluateRun(const SlamFilter& filter, const DatasetInfo& info, const RunOutput& out) {
@@ -113,7 +120,7 @@ RunErrors evaluateRun(const SlamFilter& filter, const DatasetInfo& info, const R
   e.ate_unaligned = ateRmse(out.trajectory, out.groundtruth);
   e.dead_reckoning_ate_unaligned = ateRmse(out.dead_reckoning, out.groundtruth);
   e.landmark_unaligned = landmarkRmse(filter, info.landmarks);
-  e.gps = gpsRmse(out.trajectory, out.gps, &e.gps_fixes);
+  e.gps = gpsRmse(out.trajectory, out.gps, &e.gps_fixes, &e.gps_median);
   e.dead_reckoning_gps = gpsRmse(out.dead_reckoning, out.gps);
   return e;
 }

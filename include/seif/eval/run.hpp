@@ -90,9 +90,10 @@ std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start, co
 /// (least squares, Horn/Umeyama without scale), as the TUM benchmark and evo define ATE.
 enum class Alignment { None, Rigid };
 
-/// RMS of |R p_i + t - q_i| over point pairs, with (R, t) = identity or the best rigid fit.
+/// RMS of |R p_i + t - q_i| over point pairs, with (R, t) = identity or the best rigid fit;
+/// `residuals` receives each |R p_i + t - q_i| when given.
 double alignedRmse(const std::vector<Vec2>& estimate, const std::vector<Vec2>& truth,
-                   Alignment alignment);
+                   Alignment alignment, std::vector<double>* residuals = nullptr);
 
 /// Absolute trajectory error: RMS position error against the ground truth interpolated at
 /// the estimate's stamps (stamps outside the ground truth's span are skipped).

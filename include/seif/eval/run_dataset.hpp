@@ -35,6 +35,7 @@ struct RunErrors {
   std::optional<double> ate, dead_reckoning_ate, landmark;                  ///< aligned
   std::optional<double> ate_unaligned, dead_reckoning_ate_unaligned, landmark_unaligned;
   std::optional<double> gps, dead_reckoning_gps;                            ///< aligned
+  std::optional<double> gps_median;  ///< median distance to the fixes, same alignment (robust to GPS jumps)
   std::size_t gps_fixes = 0;  ///< fixes inside the trajectory's time span (those compared)
 };
 
@@ -57,7 +58,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
 /// the fixes, after the best rigid 2-D alignment; nullopt without fixes in the span.
 /// `compared` receives the number of fixes used.
 std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const std::vector<GpsFix>& gps,
-                              std::size_t* compared = nullptr);
+                              std::size_t* compared = nullptr, std::optional<double>* median = nullptr);
 
 /// The SEIF's options as a JSON object (metrics.json "seif", `seif bench` and `seif paper`).
 std::string seifOptionsJson(const SeifOptions& options);
