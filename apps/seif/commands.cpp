@@ -24,9 +24,11 @@ int main(int argc, char** argv) {
       "  seif simulate --preset paper --seed 1 --out world       # a simulated dataset\n"
       "  seif run --dataset world --filter seif --out result      # run a filter on it\n"
       "  seif run --dataset ../shared/data/mrclam/MRCLAM_Dataset6 --robot 3 --filter ekf --out r3\n"
+      "  seif run --dataset ../shared/data/victoria-park --filter seif --out vp\n"
+      "  seif convert ../shared/data/victoria-park-isam/victoria_park.txt --to g2o --out vp.g2o\n"
       "  seif paper --runs 50 --out out/paper                     # the paper's experiment\n"
       "  seif bench --filters ekf,seif --landmarks 100,1000 --out out/bench\n\n"
-      "Datasets use the UTIAS MRCLAM layout (see README). Exit status: 0 success, 1 usage\n"
+      "Datasets: MRCLAM, Victoria Park, iSAM and g2o (see README). Exit status: 0 success, 1 usage\n"
       "error, 2 bad input data or a numerical failure (one line on stderr names the cause)."};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("seif ") + kVersion);
