@@ -42,7 +42,17 @@ void runStep(SlamFilter& filter, const Step& step, std::size_t k, RunOutput& out
   ++out.steps;
 }
 
-void finish(const SlamFilter& filter, RunOutput& out) {
+void finish(SlamFilter& filter, RunOutput& out) {
+  filter.finish();
+  // A smoother's trajectory is the smoothed one, known only now.
+  const std::vector<Pose2> smoothed = filter.smoothedTrajectory();
+  if (!smoothed.empty()) {
+    if (smoothed.size() != out.trajectory.size()) {
+      throw NumericError(filter.name() + ": the smoothed trajectory has " + std::to_string(smoothed.size()) +
+                         " poses for " + std::to_string(out.trajectory.size()) + " steps");
+    }
+    for (std::size_t k = 0; k < smoothed.size(); ++k) out.trajectory[k].pose = smoothed[k];
+  }
   out.final_stats = filter.stats();
   out.rejected_observations = filter.rejectedObservations();
   out.max_robot_links = std::max(out.max_robot_links, out.final_stats.robot_links);

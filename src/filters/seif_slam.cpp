@@ -38,6 +38,11 @@ SeifOptions::RelaxOrder SeifOptions::parseRelaxOrder(std::string_view s) {
                               "' (expected random or cyclic)");
 }
 
+SeifOptions::Sparsify SeifOptions::parseSparsify(std::string_view s) {
+  if (s == "seif") return Sparsify::Seif;
+  if (s == "eseif") return Sparsify::Eseif;
+  throw std::invalid_argument("unknown sparsification '" + std::string(s) + "' (expected seif or eseif)");
+}
 
 SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const SeifOptions& options)
     : SlamFilter(config),

@@ -3,7 +3,20 @@
 #include <seif/models/range_bearing.hpp>
 #include <seif/models/velocity_model.hpp>
 
+#include <stdexcept>
+#include <string>
+
 namespace seif {
+
+Linearization parseLinearization(std::string_view s) {
+  if (s == "standard") return Linearization::Standard;
+  if (s == "fej") return Linearization::FirstEstimates;
+  throw std::invalid_argument("unknown linearization '" + std::string(s) + "' (expected standard or fej)");
+}
+
+std::string_view linearizationName(Linearization l) {
+  return l == Linearization::FirstEstimates ? "fej" : "standard";
+}
 
 SlamFilter::SlamFilter(const FilterConfig& config)
     : motion_(config.motion ? config.motion

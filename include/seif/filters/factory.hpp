@@ -1,15 +1,36 @@
 #pragma once
-// Builds any of the filters by name: "ekf", "eif" or "seif".
+// Builds any filter from its spec: a name ("ekf", "eif", "seif", "batch") and options,
+// "seif:sparsify=eseif,linearization=fej" (the form `--filter` and `--filters` take).
 #include <seif/filters/seif_slam.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <memory>
+#include <string>
 #include <string_view>
 
 namespace seif {
 
+/// A filter name with the options its spec set; everything else from the defaults given.
+struct FilterSpec {
+  std::string text;  ///< the spec as written, e.g. "seif:linearization=fej"
+  std::string name;  ///< ekf | eif | seif | batch
+  Linearization linearization = Linearization::Standard;
+  SeifOptions seif;
+};
+
+/// Parses "name[:key=value,...]". Keys: linearization=standard|fej (every filter but the
+/// batch); for the SEIF sparsify=seif|eseif, active=N, relax=K, mean=amortized|exact,
+/// deactivate=weakest|oldest, recovery=before-update|after-update, relax-order=cyclic|random,
+/// seed=S. Unset keys keep `linearization` and `seif`. Throws std::invalid_argument naming
+/// the spec and what is wrong (unknown name, key or value; a key the filter does not take).
+FilterSpec parseFilterSpec(std::string_view text, Linearization linearization = Linearization::Standard,
+                           const SeifOptions& seif = {});
+
 /// Throws std::invalid_argument for an unknown name, listing the valid ones.
-std::unique_ptr<SlamFilter> makeFilter(std::string_view name, const Pose2& start,
+std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& start, const FilterConfig& config);
+
+/// makeFilter(parseFilterSpec(spec, config.linearization, seif_options), start, config).
+std::unique_ptr<SlamFilter> makeFilter(std::string_view spec, const Pose2& start,
                                        const FilterConfig& config,
                                        const SeifOptions& seif_options = {});
 

@@ -27,6 +27,7 @@ struct SeifOptions {
   enum class Deactivate { Weakest, Oldest };
   enum class Recovery { AfterMeasurement, BeforeMeasurement };
   enum class RelaxOrder { Random, Cyclic };
+  enum class Sparsify { Seif, Eseif };
 
   int max_active = 6;  ///< theta_x: landmarks linked to the robot after each step
   int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
@@ -48,11 +49,17 @@ struct SeifOptions {
   /// paper` uses it). Equally accurate on the paper's world; docs/seif.md has the numbers.
   RelaxOrder relax_order = RelaxOrder::Cyclic;
   std::uint64_t seed = 1;  ///< for the random choice of relaxed landmarks
+  /// How the robot's links are kept at max_active: Seif conditions the surplus away (paper
+  /// eq. 44-51; overconfident, Eustice et al. 2005). Eseif marginalises the robot out and
+  /// relocalises it from part of the current measurements (Walter, Eustice, Leonard 2007):
+  /// H stays exactly sparse and nothing is conditioned away.
+  Sparsify sparsify = Sparsify::Seif;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
   static Recovery parseRecovery(std::string_view s);      ///< "after-update" | "before-update"
   static RelaxOrder parseRelaxOrder(std::string_view s);  ///< "random" | "cyclic"
+  static Sparsify parseSparsify(std::string_view s);      ///< "seif" | "eseif"
 };
 
 class SeifSlam final : public SlamFilter {

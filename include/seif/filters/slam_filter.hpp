@@ -13,9 +13,25 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace seif {
+
+/// Where a filter evaluates its Jacobians (--linearization).
+enum class Linearization {
+  /// At the newest estimates (the textbook EKF): gains spurious information about the
+  /// global heading, which is unobservable (Huang, Mourikis, Roumeliotis, IJRR 2010).
+  Standard,
+  /// First-estimates Jacobians (Huang et al. 2010, eq. 28-32): the motion Jacobian's
+  /// heading column from the pose predictions, every landmark's Jacobian at its first
+  /// estimate, so the linearised system keeps the unobservable directions of the real one.
+  FirstEstimates,
+};
+
+/// "standard" | "fej". Throws std::invalid_argument naming the valid names.
+Linearization parseLinearization(std::string_view s);
+std::string_view linearizationName(Linearization l);
 
 struct FilterConfig {
   /// The models of the convenience calls predict(MotionInput) and update(observations).
@@ -29,6 +45,7 @@ struct FilterConfig {
   Vec3 initial_pose_sigma = Vec3(1e-3, 1e-3, 1e-3);
   /// Gross-outlier gate in measurement standard deviations (OutlierGate); infinity disables it.
   double outlier_gate = 1000.0;
+  Linearization linearization = Linearization::Standard;
 };
 
 /// Structure of the information matrix, for tests, metrics.json and the paper's table.
@@ -61,8 +78,9 @@ class SlamFilter {
   /// point), each with `sensor.noise(z)`.
   virtual void update(std::span<const Observation> observations, const MeasurementModel& sensor) = 0;
 
-  /// predict() with the config's motion model linearised at linearizationPose().
-  void predict(const MotionInput& u) { predict(motion_->linearize(linearizationPose(), u)); }
+  /// predict() with the config's motion model linearised at linearizationPose(). A
+  /// smoother, which relinearises every input, overrides it to keep the input itself.
+  virtual void predict(const MotionInput& u) { predict(motion_->linearize(linearizationPose(), u)); }
   /// update() with the config's sensor model.
   void update(std::span<const Observation> observations) { update(observations, *sensor_); }
   /// predict(u) then update(z): one filter cycle with the config's models.
@@ -70,6 +88,13 @@ class SlamFilter {
     predict(u);
     update(observations);
   }
+
+  /// Called once after the last step. A filter has nothing left to do; a smoother (the
+  /// batch MAP) solves here, and its estimates before finish() are only its initial guess.
+  virtual void finish() {}
+  /// The smoothed pose of every step (the start pose first, then one per step), for a
+  /// smoother after finish(); empty for a filter, whose trajectory is the pose after each step.
+  virtual std::vector<Pose2> smoothedTrajectory() const { return {}; }
 
   const MotionModel& motionModel() const { return *motion_; }
   const MeasurementModel& sensorModel() const { return *sensor_; }
