@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
       "  seif run --dataset ../shared/data/victoria-park --filter seif --out vp\n"
       "  seif convert ../shared/data/victoria-park-isam/victoria_park.txt --to g2o --out vp.g2o\n"
       "  seif paper --runs 50 --out out/paper                     # the paper's experiment\n"
+      "  seif consistency --preset paper --runs 50 --filters batch,ekf,seif --out out/nees\n"
       "  seif bench --filters ekf,seif --landmarks 100,1000 --out out/bench\n\n"
       "Datasets: MRCLAM, Victoria Park, iSAM and g2o (see README). Exit status: 0 success, 1 usage\n"
       "error, 2 bad input data or a numerical failure (one line on stderr names the cause)."};
@@ -37,6 +38,7 @@ int main(int argc, char** argv) {
   addBenchCommand(app);
   addPaperCommand(app);
   addConvertCommand(app);
+  addConsistencyCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -17,5 +17,6 @@ void addRunCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addPaperCommand(CLI::App& app);
 void addConvertCommand(CLI::App& app);
+void addConsistencyCommand(CLI::App& app);
 
 }  // namespace seif::cli

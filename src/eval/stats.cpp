@@ -117,6 +117,64 @@ double studentTQuantile(double p, double dof) {
   return 0.5 * (lo + hi);
 }
 
+double incompleteGamma(double a, double x) {
+  if (!(a > 0.0) || !(x >= 0.0)) throw std::invalid_argument("incompleteGamma: needs a > 0 and x >= 0");
+  if (x == 0.0) return 0.0;
+  if (std::isinf(x)) return 1.0;
+  const double log_front = a * std::log(x) - x - std::lgamma(a);
+  if (x < a + 1.0) {  // series: P = e^-x x^a / Gamma(a + 1) * sum x^n / ((a+1)...(a+n))
+    double term = 1.0 / a, sum = term;
+    for (int n = 1; n < 100000 && std::fabs(term) > 1e-17 * std::fabs(sum); ++n) {
+      term *= x / (a + n);
+      sum += term;
+    }
+    return std::exp(log_front) * sum;
+  }
+  // Continued fraction of Q = 1 - P (Numerical Recipes §6.2, modified Lentz).
+  constexpr double kTiny = 1e-300;
+  double b = x + 1.0 - a, c = 1.0 / kTiny, d = 1.0 / b, h = d;
+  for (int i = 1; i < 100000; ++i) {
+    const double an = -i * (i - a);
+    b += 2.0;
+    d = an * d + b;
+    if (std::fabs(d) < kTiny) d = kTiny;
+    c = b + an / c;
+    if (std::fabs(c) < kTiny) c = kTiny;
+    d = 1.0 / d;
+    const double delta = d * c;
+    h *= delta;
+    if (std::fabs(delta - 1.0) < 1e-16) break;
+  }
+  return 1.0 - std::exp(log_front) * h;
+}
+
+double chiSquareCdf(double x, double dof) {
+  if (!(dof > 0.0)) throw std::invalid_argument("chiSquareCdf: dof must be positive");
+  return x <= 0.0 ? 0.0 : incompleteGamma(0.5 * dof, 0.5 * x);
+}
+
+double chiSquareQuantile(double p, double dof) {
+  if (!(p > 0.0 && p < 1.0)) throw std::invalid_argument("chiSquareQuantile: p must be in (0, 1)");
+  if (!(dof > 0.0)) throw std::invalid_argument("chiSquareQuantile: dof must be positive");
+  double lo = 0.0, hi = std::max(1.0, 2.0 * dof);
+  while (chiSquareCdf(hi, dof) < p) {
+    lo = hi;
+    hi *= 2.0;
+  }
+  for (int i = 0; i < 200 && hi - lo > 1e-13 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (chiSquareCdf(mid, dof) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+Band neesBand95(std::size_t samples, int dof) {
+  if (samples == 0 || dof <= 0) throw std::invalid_argument("neesBand95: needs samples > 0 and dof > 0");
+  const double n = static_cast<double>(samples);
+  const double k = n * dof;
+  return {chiSquareQuantile(0.025, k) / n, chiSquareQuantile(0.975, k) / n};
+}
+
 double ci95HalfWidth(std::span<const double> xs) {
   if (xs.size() < 2) return 0.0;
   const double n = static_cast<double>(xs.size());

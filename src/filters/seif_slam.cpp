@@ -233,12 +233,9 @@ Mat2 SeifSlam::landmarkCovariance(int id) const {
   return factor().covarianceBlock<2>(LandmarkIndex::stateIndex(store_.index().require(id, "seif")));
 }
 
-PredictedMeasurement SeifSlam::predictMeasurement(int id, const MeasurementModel& sensor,
-                                                 const Mat2& R) const {
-  const int slot = store_.index().require(id, "seif");
-  const int i = LandmarkIndex::stateIndex(slot);
-  // The landmark's two columns of Sigma (two solves with the cached factor) give its
-  // block and its cross-covariance with the pose.
+Eigen::Matrix<double, Eigen::Dynamic, 2> SeifSlam::landmarkCovarianceColumns(int id) const {
+  const int i = LandmarkIndex::stateIndex(store_.index().require(id, "seif"));
+  // Two solves with the cached factor: H Sigma_{:,i} = e_i.
   Eigen::VectorXd e = Eigen::VectorXd::Zero(3 + 2 * store_.size());
   Eigen::Matrix<double, Eigen::Dynamic, 2> cols(e.size(), 2);
   for (int c = 0; c < 2; ++c) {
@@ -246,6 +243,15 @@ PredictedMeasurement SeifSlam::predictMeasurement(int id, const MeasurementModel
     e(i + c) = 1.0;
     cols.col(c) = factor().solve(e);
   }
+  return cols;
+}
+
+PredictedMeasurement SeifSlam::predictMeasurement(int id, const MeasurementModel& sensor,
+                                                 const Mat2& R) const {
+  const int slot = store_.index().require(id, "seif");
+  const int i = LandmarkIndex::stateIndex(slot);
+  // The landmark's columns of Sigma give its block and its cross-covariance with the pose.
+  const Eigen::Matrix<double, Eigen::Dynamic, 2> cols = landmarkCovarianceColumns(id);
   return innovation(sensor, store_.robotMean(), store_.node(slot).mu, poseCovariance(),
                     cols.topRows<3>(), cols.middleRows<2>(i), R);
 }

@@ -3,6 +3,7 @@
 #include <seif/models/range_bearing.hpp>
 #include <seif/models/velocity_model.hpp>
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -25,6 +26,13 @@ SlamFilter::SlamFilter(const FilterConfig& config)
       sensor_(config.sensor ? config.sensor
                             : std::make_shared<RangeBearingModel>(config.noise.sigma_range,
                                                                   config.noise.sigma_bearing)) {}
+
+Eigen::Matrix<double, Eigen::Dynamic, 2> SlamFilter::landmarkCovarianceColumns(int id) const {
+  const std::vector<int>& ids = landmarkIds();
+  const auto it = std::find(ids.begin(), ids.end(), id);
+  if (it == ids.end()) throw std::out_of_range(name() + ": landmark " + std::to_string(id) + " is not in the map");
+  return covariance().middleCols<2>(3 + 2 * (it - ids.begin()));
+}
 
 PredictedMeasurement SlamFilter::innovation(const MeasurementModel& sensor, const Pose2& x, const Vec2& y,
                                             const Mat3& Sxx, const Mat32& Sxy, const Mat2& Syy,

@@ -31,6 +31,27 @@ double studentTCdf(double t, double dof);
 /// outside the domain.
 double studentTQuantile(double p, double dof);
 
+/// Regularized lower incomplete gamma function P(a, x) for a > 0, x >= 0 (series for
+/// x < a + 1, continued fraction otherwise; absolute accuracy ~1e-14).
+double incompleteGamma(double a, double x);
+
+/// Cumulative distribution function of the chi-square distribution: P(dof / 2, x / 2).
+double chiSquareCdf(double x, double dof);
+
+/// The p-quantile of the chi-square distribution with `dof` > 0 degrees of freedom, p in
+/// (0, 1), by bisection of chiSquareCdf() (relative accuracy ~1e-12).
+double chiSquareQuantile(double p, double dof);
+
+/// The two-sided 95 % band of the mean of `samples` independent NEES values of `dof`
+/// degrees of freedom each (Bar-Shalom, Li, Kirubarajan 2001, §5.4.2): the sum is
+/// chi-square with samples * dof degrees of freedom, so the band is
+/// [chi2_{0.025}(n d) / n, chi2_{0.975}(n d) / n].
+struct Band {
+  double lo = 0.0;
+  double hi = 0.0;
+};
+Band neesBand95(std::size_t samples, int dof);
+
 /// Half-width of the two-sided 95 % confidence interval of the mean of an i.i.d. sample:
 /// t_{0.975, n-1} * s / sqrt(n), s = sampleStdDev(). 0 for n < 2 (no interval: undefined).
 double ci95HalfWidth(std::span<const double> xs);

@@ -29,6 +29,9 @@ class EkfSlam final : public SlamFilter {
   bool hasLandmark(int id) const override { return index_.find(id) >= 0; }
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
+  Eigen::Matrix<double, Eigen::Dynamic, 2> landmarkCovarianceColumns(int id) const override {
+    return sigma_.middleCols<2>(LandmarkIndex::stateIndex(index_.require(id, "ekf")));
+  }
   FilterStats stats() const override;
   std::size_t robotLinks() const override { return landmarkIds().size(); }  // Sigma^-1 is dense
   std::size_t rejectedObservations() const override { return gate_.rejected(); }

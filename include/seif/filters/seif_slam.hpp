@@ -81,6 +81,7 @@ class SeifSlam final : public SlamFilter {
   bool hasLandmark(int id) const override { return store_.index().find(id) >= 0; }
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
+  Eigen::Matrix<double, Eigen::Dynamic, 2> landmarkCovarianceColumns(int id) const override;
   FilterStats stats() const override;
   std::size_t robotLinks() const override { return store_.robotLinks().size(); }
   std::size_t rejectedObservations() const override { return gate_.rejected(); }

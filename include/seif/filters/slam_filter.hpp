@@ -95,6 +95,8 @@ class SlamFilter {
   /// The smoothed pose of every step (the start pose first, then one per step), for a
   /// smoother after finish(); empty for a filter, whose trajectory is the pose after each step.
   virtual std::vector<Pose2> smoothedTrajectory() const { return {}; }
+  /// True for a smoother: its estimates mean something only after finish().
+  virtual bool smoother() const { return false; }
 
   const MotionModel& motionModel() const { return *motion_; }
   const MeasurementModel& sensorModel() const { return *sensor_; }
@@ -119,6 +121,11 @@ class SlamFilter {
   virtual bool hasLandmark(int id) const = 0;
   virtual Vec2 landmark(int id) const = 0;
   virtual Mat2 landmarkCovariance(int id) const = 0;
+  /// The two columns of the joint covariance that belong to landmark `id`, in the state
+  /// order: its cross-covariance with the pose and every landmark (relative NEES, data
+  /// association). Default: two columns of covariance() (dense). EKF: a read, O(N);
+  /// SEIF: two solves with its cached sparse factor.
+  virtual Eigen::Matrix<double, Eigen::Dynamic, 2> landmarkCovarianceColumns(int id) const;
   /// Structure of H. O(1) for the SEIF; dense filters count their whole matrix.
   virtual FilterStats stats() const = 0;
   /// Landmarks linked to the robot now, and H blocks touched by the last step: both cheap

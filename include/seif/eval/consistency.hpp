@@ -1,0 +1,88 @@
+#pragma once
+// Monte-Carlo consistency of any set of filters on a simulator world (`seif consistency`):
+// the normalised estimation error squared (NEES, Bar-Shalom, Li, Kirubarajan 2001, §5.4.2)
+// of the pose (3 dof) and of every landmark (2 dof), against time, averaged over R runs and
+// compared with the chi-square 95 % band of that average. Two frames:
+//   global:   e = estimate - truth, P = the filter's marginal covariance;
+//   relative: everything relative to the first landmark the filter mapped, m0 - the frame
+//             in which the map's translation is observable: e = (m_i - m0)^ - (m_i - m0),
+//             P = S_ii + S_00 - S_i0 - S_0i; the pose as (p - m0, theta).
+// Beside NEES, the final landmark error (unaligned and after rigid alignment). Run r
+// simulates the world with seed world.seed + r; every filter sees the same data; runs are
+// independent and stored by index, so the results do not depend on the number of threads.
+#include <seif/eval/stats.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/sim/world.hpp>
+
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace seif {
+
+struct ConsistencyOptions {
+  WorldConfig world;
+  int runs = 50;
+  std::vector<FilterSpec> filters;
+  /// Points of the NEES-against-time series, evenly spaced over the steps (the last step
+  /// always included); each costs every filter its marginals (SEIF: one factorisation).
+  int samples = 50;
+  unsigned threads = 0;  ///< 0: the number of cores
+};
+
+/// NEES of one filter at one instant: global and relative frame, pose and landmark (the
+/// landmark value is the mean over the mapped landmarks). NaN where undefined (no landmark
+/// yet, fewer than two for the relative frame, or a smoother before its end).
+struct NeesPoint {
+  double pose = 0.0;
+  double landmark = 0.0;
+  double pose_relative = 0.0;
+  double landmark_relative = 0.0;
+};
+
+struct ConsistencyFilterResult {
+  std::string name;               ///< the spec as given, e.g. "seif:sparsify=eseif"
+  std::vector<NeesPoint> nees;    ///< mean over runs at each sample step (finite values only)
+  NeesPoint nees_final;           ///< mean over runs after the last step
+  std::vector<double> landmark_nees_runs;  ///< final landmark NEES of each run
+  double error_final = 0.0;          ///< landmark RMSE [m], mean over runs
+  double error_aligned_final = 0.0;  ///< the same after rigid alignment to the truth
+  double mse_final = 0.0;            ///< mean squared landmark error [m^2], mean over runs
+  double mse_aligned_final = 0.0;
+  double seconds = 0.0;              ///< filter time, summed over runs (finish() included)
+};
+
+struct ConsistencyResult {
+  int runs = 0;
+  std::size_t steps = 0;
+  Band pose_band;      ///< 95 % band of the mean of `runs` 3-dof NEES values
+  Band landmark_band;  ///< 95 % band of the mean of `runs` 2-dof NEES values
+  std::vector<std::size_t> sample_steps;  ///< steps after which each NeesPoint was taken (1-based)
+  std::vector<ConsistencyFilterResult> filters;
+};
+
+/// Runs the study. `progress(done, total)` counts runs and is called from worker threads,
+/// one call at a time. Throws NumericError naming the run's seed and the filter when a
+/// filter fails, std::invalid_argument for runs < 1, samples < 1 or no filter.
+ConsistencyResult runConsistency(const ConsistencyOptions& options,
+                                 const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+/// The NEES of `filter` now against the true pose and landmark positions (by id).
+NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const std::map<int, Vec2>& truth);
+
+/// nees.json: {"runs", "steps", "band95": {"pose": [lo, hi], "landmark": [lo, hi]},
+/// "sample_steps", "filters": [{"name", "pose_nees_final", "landmark_nees_final",
+/// "pose_nees_relative_final", "landmark_nees_relative_final", "error_final",
+/// "error_aligned_final", "mse_final", "mse_aligned_final", "seconds", "nees": {"pose":
+/// [...], "landmark": [...], "pose_relative": [...], "landmark_relative": [...]}}]}.
+/// NaN is written as null.
+std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOptions& options);
+
+/// The console / README table: one row per filter with final NEES (global, relative),
+/// errors, and their mean squared error as a multiple of the first smoother's ("batch")
+/// when one ran.
+std::string consistencyTable(const ConsistencyResult& result);
+
+}  // namespace seif

@@ -1,0 +1,343 @@
+#include <seif/core/angles.hpp>
+#include <seif/core/errors.hpp>
+#include <seif/eval/consistency.hpp>
+#include <seif/eval/run.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <mutex>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+namespace seif {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// e^T P^-1 e, NaN when P is not positive definite (a filter that lost its covariance).
+template <int N>
+double nees(const Eigen::Matrix<double, N, 1>& e, const Eigen::Matrix<double, N, N>& P) {
+  const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(P);
+  if (llt.info() != Eigen::Success) return kNaN;
+  return e.dot(llt.solve(e));
+}
+
+/// What one filter gave in one run.
+struct FilterRun {
+  std::vector<NeesPoint> nees;  // per sample
+  double mse = kNaN, mse_aligned = kNaN, rmse = kNaN, rmse_aligned = kNaN;
+  double seconds = 0.0;
+};
+
+std::vector<std::size_t> sampleSteps(std::size_t steps, int samples) {
+  std::vector<std::size_t> at;
+  const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(samples), steps);
+  for (std::size_t i = 1; i <= n; ++i) at.push_back((i * steps) / n);  // ends at `steps`
+  at.erase(std::unique(at.begin(), at.end()), at.end());
+  return at;
+}
+
+FilterRun runOne(const FilterSpec& spec, const Dataset& data, const FilterConfig& config, const Pose2& start,
+                 const std::vector<std::size_t>& samples, std::uint64_t seed) {
+  FilterSpec s = spec;
+  s.seif.seed = seed;  // a SEIF's random relaxation varies with the run like the data
+  std::unique_ptr<SlamFilter> filter = makeFilter(s, start, config);
+  FilterRun out;
+  out.nees.assign(samples.size(), NeesPoint{kNaN, kNaN, kNaN, kNaN});
+  const auto t0 = std::chrono::steady_clock::now();
+  std::size_t next = 0;
+  for (std::size_t k = 0; k < data.steps.size(); ++k) {
+    filter->step(data.steps[k].u, data.steps[k].observations);
+    if (next < samples.size() && samples[next] == k + 1) {
+      const bool last = k + 1 == data.steps.size();
+      if (last) filter->finish();
+      if (last || !filter->smoother()) {
+        const Pose2 truth = interpolatePose(data.groundtruth, data.steps[k].time);
+        out.nees[next] = measureNees(*filter, truth, data.landmarks);
+      }
+      ++next;
+    }
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<Vec2> est, ref;
+  for (int id : filter->landmarkIds()) {
+    if (const auto it = data.landmarks.find(id); it != data.landmarks.end()) {
+      est.push_back(filter->landmark(id));
+      ref.push_back(it->second);
+    }
+  }
+  if (!est.empty()) {
+    out.rmse = alignedRmse(est, ref, Alignment::None);
+    out.rmse_aligned = alignedRmse(est, ref, Alignment::Rigid);
+    out.mse = out.rmse * out.rmse;
+    out.mse_aligned = out.rmse_aligned * out.rmse_aligned;
+  }
+  return out;
+}
+
+/// Mean of the finite values; NaN when there are none.
+double finiteMean(const std::vector<double>& xs) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (double x : xs) {
+    if (std::isfinite(x)) {
+      sum += x;
+      ++n;
+    }
+  }
+  return n == 0 ? kNaN : sum / static_cast<double>(n);
+}
+
+NeesPoint meanPoint(const std::vector<NeesPoint>& points) {
+  std::vector<double> a, b, c, d;
+  for (const NeesPoint& p : points) {
+    a.push_back(p.pose);
+    b.push_back(p.landmark);
+    c.push_back(p.pose_relative);
+    d.push_back(p.landmark_relative);
+  }
+  return {finiteMean(a), finiteMean(b), finiteMean(c), finiteMean(d)};
+}
+
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+}  // namespace
+
+NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const std::map<int, Vec2>& truth) {
+  NeesPoint p{kNaN, kNaN, kNaN, kNaN};
+  const Pose2 x = filter.pose();
+  Vec3 e = x - true_pose;
+  e(2) = wrapAngle(e(2));
+  const Mat3 Pxx = filter.poseCovariance();
+  p.pose = nees<3>(e, Pxx);
+
+  const std::vector<int>& ids = filter.landmarkIds();
+  std::vector<double> global;
+  for (int id : ids) {
+    if (const auto it = truth.find(id); it != truth.end()) {
+      global.push_back(nees<2>(filter.landmark(id) - it->second, filter.landmarkCovariance(id)));
+    }
+  }
+  p.landmark = finiteMean(global);
+
+  // The frame of the first landmark mapped (state slot 0): its two covariance columns give
+  // every cross-covariance the relative errors need.
+  if (ids.size() < 2 || truth.find(ids[0]) == truth.end()) return p;
+  const int anchor = ids[0];
+  const Vec2 m0 = filter.landmark(anchor), m0_true = truth.at(anchor);
+  const Eigen::Matrix<double, Eigen::Dynamic, 2> c0 = filter.landmarkCovarianceColumns(anchor);
+  const Mat2 S00 = c0.middleRows<2>(3);
+  // Pose: (p - m0, theta) = A [x; m0] with A = [I2 0 -I2; 0 0 1 0 0].
+  Eigen::Matrix<double, 3, 5> A = Eigen::Matrix<double, 3, 5>::Zero();
+  A.leftCols<3>().setIdentity();
+  A.block<2, 2>(0, 3) = -Mat2::Identity();
+  Eigen::Matrix<double, 5, 5> J = Eigen::Matrix<double, 5, 5>::Zero();
+  J.topLeftCorner<3, 3>() = Pxx;
+  J.block<3, 2>(0, 3) = c0.topRows<3>();
+  J.block<2, 3>(3, 0) = c0.topRows<3>().transpose();
+  J.bottomRightCorner<2, 2>() = S00;
+  Vec3 er;
+  er.head<2>() = (x.head<2>() - m0) - (true_pose.head<2>() - m0_true);
+  er(2) = e(2);
+  p.pose_relative = nees<3>(er, Mat3(A * J * A.transpose()));
+  std::vector<double> relative;
+  for (std::size_t k = 1; k < ids.size(); ++k) {
+    const auto it = truth.find(ids[k]);
+    if (it == truth.end()) continue;
+    const Eigen::Index i = 3 + 2 * static_cast<Eigen::Index>(k);
+    const Mat2 Si0 = c0.middleRows<2>(i);
+    const Mat2 P = filter.landmarkCovariance(ids[k]) + S00 - Si0 - Si0.transpose();
+    const Vec2 er_i = (filter.landmark(ids[k]) - m0) - (it->second - m0_true);
+    relative.push_back(nees<2>(er_i, P));
+  }
+  p.landmark_relative = finiteMean(relative);
+  return p;
+}
+
+ConsistencyResult runConsistency(const ConsistencyOptions& options,
+                                 const std::function<void(std::size_t, std::size_t)>& progress) {
+  if (options.runs < 1) throw std::invalid_argument("consistency: runs must be >= 1");
+  if (options.samples < 1) throw std::invalid_argument("consistency: samples must be >= 1");
+  if (options.filters.empty()) throw std::invalid_argument("consistency: no filter given");
+  const std::size_t runs = static_cast<std::size_t>(options.runs);
+  const std::size_t nf = options.filters.size();
+  std::vector<std::vector<FilterRun>> results(runs);  // [run][filter]
+  std::vector<std::size_t> steps_of_run(runs, 0);
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex progress_mutex;
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+
+  auto worker = [&] {
+    for (std::size_t r = next++; r < runs; r = next++) {
+      try {
+        WorldConfig world = options.world;
+        world.seed = options.world.seed + r;
+        const Dataset data = buildDataset(simulate(world));
+        FilterConfig config;
+        config.noise = data.noise.value_or(world.noise);
+        const Pose2 start = startPose(data);
+        const std::vector<std::size_t> samples = sampleSteps(data.steps.size(), options.samples);
+        steps_of_run[r] = data.steps.size();
+        for (const FilterSpec& spec : options.filters) {
+          try {
+            results[r].push_back(runOne(spec, data, config, start, samples, world.seed));
+          } catch (const std::exception& e) {
+            throw NumericError("consistency: run with seed " + std::to_string(world.seed) + ", filter " +
+                               spec.text + ": " + e.what());
+          }
+        }
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+        next = runs;  // stop the others early
+        return;
+      }
+      const std::size_t d = ++done;
+      if (progress) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        progress(d, runs);
+      }
+    }
+  };
+  unsigned threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  threads = std::min<unsigned>(threads, static_cast<unsigned>(runs));
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+
+  ConsistencyResult result;
+  result.runs = options.runs;
+  result.steps = steps_of_run[0];
+  for (std::size_t r = 1; r < runs; ++r) {
+    if (steps_of_run[r] != result.steps) {
+      throw NumericError("consistency: runs differ in their number of steps (" + std::to_string(result.steps) +
+                         " and " + std::to_string(steps_of_run[r]) + ")");
+    }
+  }
+  result.sample_steps = sampleSteps(result.steps, options.samples);
+  result.pose_band = neesBand95(runs, 3);
+  result.landmark_band = neesBand95(runs, 2);
+  for (std::size_t f = 0; f < nf; ++f) {
+    ConsistencyFilterResult fr;
+    fr.name = options.filters[f].text;
+    for (std::size_t s = 0; s < result.sample_steps.size(); ++s) {
+      std::vector<NeesPoint> at;
+      for (std::size_t r = 0; r < runs; ++r) at.push_back(results[r][f].nees[s]);
+      fr.nees.push_back(meanPoint(at));
+    }
+    fr.nees_final = fr.nees.back();
+    std::vector<double> mse, mse_aligned, rmse, rmse_aligned;
+    for (std::size_t r = 0; r < runs; ++r) {
+      const FilterRun& run = results[r][f];
+      fr.landmark_nees_runs.push_back(run.nees.back().landmark);
+      mse.push_back(run.mse);
+      mse_aligned.push_back(run.mse_aligned);
+      rmse.push_back(run.rmse);
+      rmse_aligned.push_back(run.rmse_aligned);
+      fr.seconds += run.seconds;
+    }
+    fr.mse_final = finiteMean(mse);
+    fr.mse_aligned_final = finiteMean(mse_aligned);
+    fr.error_final = finiteMean(rmse);
+    fr.error_aligned_final = finiteMean(rmse_aligned);
+    result.filters.push_back(std::move(fr));
+  }
+  return result;
+}
+
+std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOptions& options) {
+  nlohmann::json filters = nlohmann::json::array();
+  for (const ConsistencyFilterResult& f : result.filters) {
+    nlohmann::json series = {{"pose", nlohmann::json::array()},
+                             {"landmark", nlohmann::json::array()},
+                             {"pose_relative", nlohmann::json::array()},
+                             {"landmark_relative", nlohmann::json::array()}};
+    for (const NeesPoint& p : f.nees) {
+      series["pose"].push_back(number(p.pose));
+      series["landmark"].push_back(number(p.landmark));
+      series["pose_relative"].push_back(number(p.pose_relative));
+      series["landmark_relative"].push_back(number(p.landmark_relative));
+    }
+    filters.push_back({{"name", f.name},
+                       {"pose_nees_final", number(f.nees_final.pose)},
+                       {"landmark_nees_final", number(f.nees_final.landmark)},
+                       {"pose_nees_relative_final", number(f.nees_final.pose_relative)},
+                       {"landmark_nees_relative_final", number(f.nees_final.landmark_relative)},
+                       {"error_final", number(f.error_final)},
+                       {"error_aligned_final", number(f.error_aligned_final)},
+                       {"mse_final", number(f.mse_final)},
+                       {"mse_aligned_final", number(f.mse_aligned_final)},
+                       {"seconds", f.seconds},
+                       {"nees", series}});
+  }
+  const WorldConfig& w = options.world;
+  nlohmann::json j = {
+      {"runs", result.runs},
+      {"steps", result.steps},
+      {"world",
+       {{"preset", std::string(worldPresetName(w.preset))},
+        {"path", w.preset == WorldPreset::Paper ? nlohmann::json(std::string(paperPathName(w.paper_path)))
+                                                : nlohmann::json(nullptr)},
+        {"landmarks", w.landmarks},
+        {"steps", w.steps},
+        {"seed_first", w.seed},
+        {"seed_last", w.seed + static_cast<std::uint64_t>(result.runs) - 1}}},
+      {"band95",
+       {{"pose", {result.pose_band.lo, result.pose_band.hi}},
+        {"landmark", {result.landmark_band.lo, result.landmark_band.hi}}}},
+      {"sample_steps", result.sample_steps},
+      {"filters", filters}};
+  return j.dump(2);
+}
+
+std::string consistencyTable(const ConsistencyResult& result) {
+  const ConsistencyFilterResult* reference = nullptr;
+  for (const ConsistencyFilterResult& f : result.filters) {
+    if (f.name == "batch" || f.name.rfind("batch:", 0) == 0) {
+      reference = &f;
+      break;
+    }
+  }
+  std::ostringstream t;
+  t << std::fixed;
+  t << "| filter | pose NEES | landmark NEES | rel. pose NEES | rel. landmark NEES | landmark RMSE [m] | aligned [m] |";
+  if (reference) t << " MSE / batch | aligned MSE / batch |";
+  t << "\n|---|---:|---:|---:|---:|---:|---:|" << (reference ? "---:|---:|" : "") << "\n";
+  auto cell = [&](double v, int digits) {
+    std::ostringstream c;
+    if (std::isfinite(v)) {
+      c << std::fixed << std::setprecision(digits) << v;
+    } else {
+      c << "-";
+    }
+    return c.str();
+  };
+  for (const ConsistencyFilterResult& f : result.filters) {
+    t << "| " << f.name << " | " << cell(f.nees_final.pose, 2) << " | " << cell(f.nees_final.landmark, 2) << " | "
+      << cell(f.nees_final.pose_relative, 2) << " | " << cell(f.nees_final.landmark_relative, 2) << " | "
+      << cell(f.error_final, 4) << " | " << cell(f.error_aligned_final, 4) << " |";
+    if (reference) {
+      t << " " << cell(f.mse_final / reference->mse_final, 2) << " | "
+        << cell(f.mse_aligned_final / reference->mse_aligned_final, 2) << " |";
+    }
+    t << "\n";
+  }
+  t << "\nNEES: mean over " << result.runs << " runs after step " << result.steps << "; 95 % band for "
+    << result.runs << " runs: pose [" << cell(result.pose_band.lo, 2) << ", " << cell(result.pose_band.hi, 2)
+    << "] (3 dof), landmark [" << cell(result.landmark_band.lo, 2) << ", " << cell(result.landmark_band.hi, 2)
+    << "] (2 dof, each landmark's NEES averaged over the map first).\n";
+  return t.str();
+}
+
+}  // namespace seif

@@ -1,0 +1,142 @@
+// Tests of the consistency harness (eval/consistency.hpp): the chi-square band against
+// published tables, NEES in both frames against an independent computation from the
+// filter's dense covariance, reproducibility across thread counts, and `seif consistency`
+// end to end.
+#include "cli_support.hpp"
+
+#include <seif/eval/consistency.hpp>
+#include <seif/eval/stats.hpp>
+#include <seif/filters/ekf_slam.hpp>
+
+#include <Eigen/Cholesky>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+
+namespace {
+
+TEST(ChiSquare, QuantilesMatchTables) {
+  // Abramowitz & Stegun table 26.8 / NIST handbook values.
+  EXPECT_NEAR(seif::chiSquareQuantile(0.975, 2), 7.377759, 1e-5);
+  EXPECT_NEAR(seif::chiSquareQuantile(0.025, 2), 0.0506356, 1e-6);
+  EXPECT_NEAR(seif::chiSquareQuantile(0.95, 10), 18.307038, 1e-5);
+  EXPECT_NEAR(seif::chiSquareQuantile(0.975, 100), 129.5612, 1e-3);
+  EXPECT_NEAR(seif::chiSquareQuantile(0.025, 100), 74.2219, 1e-3);
+  EXPECT_NEAR(seif::chiSquareCdf(seif::chiSquareQuantile(0.3, 7.5), 7.5), 0.3, 1e-12);
+  EXPECT_THROW(seif::chiSquareQuantile(1.0, 3), std::invalid_argument);
+}
+
+TEST(ChiSquare, NeesBandIsTheBandOfTheMeanOfRunsValues) {
+  const seif::Band b = seif::neesBand95(50, 2);
+  EXPECT_NEAR(b.lo, 74.2219 / 50, 1e-4);
+  EXPECT_NEAR(b.hi, 129.5612 / 50, 1e-4);
+  const seif::Band one = seif::neesBand95(1, 3);  // a single 3-dof value
+  EXPECT_NEAR(one.lo, 0.215795, 1e-5);
+  EXPECT_NEAR(one.hi, 9.348404, 1e-5);
+}
+
+// An EKF with two landmarks, and true positions off its estimates by known amounts.
+struct TwoLandmarks {
+  seif::EkfSlam ekf{seif::Pose2(0.1, 0.2, 0.3), seif::FilterConfig{}};
+  std::map<int, seif::Vec2> truth;
+  seif::Pose2 true_pose;
+  TwoLandmarks() {
+    std::vector<seif::Observation> z = {{7, seif::Vec2(0.15, 0.2), {}}, {9, seif::Vec2(0.18, -0.4), {}}};
+    ekf.step(seif::VelocityControl{0.02, 0.05, 1.0}, z);
+    ekf.step(seif::VelocityControl{0.02, -0.03, 1.0}, z);
+    truth[7] = ekf.landmark(7) + seif::Vec2(0.004, -0.002);
+    truth[9] = ekf.landmark(9) + seif::Vec2(-0.003, 0.005);
+    true_pose = ekf.pose() + seif::Vec3(0.002, 0.001, -0.01);
+  }
+};
+
+TEST(Nees, BothFramesAgreeWithTheDenseCovariance) {
+  const TwoLandmarks w;
+  const seif::NeesPoint p = seif::measureNees(w.ekf, w.true_pose, w.truth);
+  const Eigen::MatrixXd S = w.ekf.covariance();  // [x y th m7 m9]
+  const Eigen::VectorXd mu = w.ekf.mean();
+  Eigen::VectorXd t(7);
+  t << w.true_pose, w.truth.at(7), w.truth.at(9);
+  const Eigen::VectorXd e = mu - t;
+  auto nees = [](const Eigen::VectorXd& d, const Eigen::MatrixXd& P) { return d.dot(P.ldlt().solve(d)); };
+  EXPECT_NEAR(p.pose, nees(e.head(3), S.topLeftCorner(3, 3)), 1e-9 * p.pose);
+  const double lm = 0.5 * (nees(e.segment(3, 2), S.block(3, 3, 2, 2)) + nees(e.segment(5, 2), S.block(5, 5, 2, 2)));
+  EXPECT_NEAR(p.landmark, lm, 1e-9 * lm);
+  // Relative to landmark 7 (mapped first): linear maps of the joint error.
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(5, 7);
+  A.block(0, 0, 3, 3).setIdentity();  // (p - m7, theta)
+  A.block(0, 3, 2, 2) = -Eigen::Matrix2d::Identity();
+  A.block(3, 5, 2, 2).setIdentity();  // m9 - m7
+  A.block(3, 3, 2, 2) = -Eigen::Matrix2d::Identity();
+  const Eigen::VectorXd er = A * e;
+  const Eigen::MatrixXd Sr = A * S * A.transpose();
+  EXPECT_NEAR(p.pose_relative, nees(er.head(3), Sr.topLeftCorner(3, 3)), 1e-9 * p.pose_relative);
+  EXPECT_NEAR(p.landmark_relative, nees(er.tail(2), Sr.bottomRightCorner(2, 2)), 1e-9 * p.landmark_relative);
+  // And the relative frame differs from the global one (the check could fail).
+  EXPECT_GT(std::abs(p.landmark_relative - lm), 1e-3 * lm);
+}
+
+seif::ConsistencyOptions smallStudy(unsigned threads) {
+  seif::ConsistencyOptions o;
+  o.world = seif::presetConfig(seif::WorldPreset::Paper, 20, 120, 5);
+  o.runs = 4;
+  o.samples = 6;
+  o.threads = threads;
+  o.filters = {seif::parseFilterSpec("ekf"), seif::parseFilterSpec("seif:active=4")};
+  return o;
+}
+
+TEST(Consistency, ResultsDoNotDependOnTheThreadCount) {
+  const seif::ConsistencyOptions one = smallStudy(1), two = smallStudy(2);
+  // Everything but the times, to the bit.
+  auto untimed = [](const seif::ConsistencyOptions& o) {
+    nlohmann::json j = nlohmann::json::parse(seif::consistencyJson(seif::runConsistency(o), o));
+    for (auto& f : j["filters"]) f.erase("seconds");
+    return j;
+  };
+  const nlohmann::json j = untimed(one);
+  EXPECT_EQ(j.dump(), untimed(two).dump());
+  EXPECT_EQ(j["runs"], 4);
+  EXPECT_EQ(j["sample_steps"].back(), 120);
+  ASSERT_EQ(j["filters"].size(), 2u);
+  EXPECT_EQ(j["filters"][1]["name"], "seif:active=4");
+  for (const auto& f : j["filters"]) {
+    EXPECT_GT(f["landmark_nees_final"].get<double>(), 0.0);
+    EXPECT_GT(f["error_final"].get<double>(), f["error_aligned_final"].get<double>() * 0.999);
+    EXPECT_EQ(f["nees"]["pose"].size(), 6u);
+  }
+}
+
+TEST(Consistency, BadOptionsAreRejected) {
+  seif::ConsistencyOptions o = smallStudy(1);
+  o.runs = 0;
+  EXPECT_THROW(seif::runConsistency(o), std::invalid_argument);
+  o = smallStudy(1);
+  o.filters.clear();
+  EXPECT_THROW(seif::runConsistency(o), std::invalid_argument);
+  EXPECT_THROW(seif::parseFilterSpec("seif:sparsify=magic"), std::invalid_argument);
+  EXPECT_THROW(seif::parseFilterSpec("ekf:active=3"), std::invalid_argument);
+  EXPECT_THROW(seif::parseFilterSpec("seif:active"), std::invalid_argument);
+  EXPECT_THROW(seif::parseFilterSpec("ukf"), std::invalid_argument);
+  const seif::FilterSpec s = seif::parseFilterSpec("seif:sparsify=eseif,linearization=fej,active=4");
+  EXPECT_EQ(s.seif.sparsify, seif::SeifOptions::Sparsify::Eseif);
+  EXPECT_EQ(s.linearization, seif::Linearization::FirstEstimates);
+  EXPECT_EQ(s.seif.max_active, 4);
+}
+
+TEST(ConsistencyCli, WritesTheTableJsonAndCsv) {
+  const auto dir = seif::test::scratchDir("consistency_cli");
+  const auto r = seif::test::runCli("consistency --runs 2 --landmarks 15 --steps 60 --samples 3 "
+                                    "--filters ekf,seif:active=3 --no-figures --out " + dir.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("| seif:active=3 |"), std::string::npos) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(seif::test::slurp(dir / "nees.json"));
+  EXPECT_EQ(j["band95"]["landmark"].size(), 2u);
+  EXPECT_NE(seif::test::slurp(dir / "nees.csv").find("\"ekf\",60,"), std::string::npos);
+  const auto bad = seif::test::runCli("consistency --filters ekf:relax=3 --out " + dir.string());
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.err.find("ekf:relax=3"), std::string::npos) << bad.err;
+}
+
+}  // namespace
