@@ -51,9 +51,11 @@ TEST(CliDatasets, IsamGraphWithEveryFilterAndThroughG2o) {
   if (!fs::exists(isam)) GTEST_SKIP() << "victoria_park.txt not found at " << isam;
   const auto dir = scratchDir("isam");
   for (const char* f : {"ekf", "eif", "seif"}) {
-    const auto r = runCli("run --dataset " + isam + " --filter " + f + " --out " + (dir / f).string());
+    const auto r = runCli("run --dataset " + isam + " --filter " + f + " --trajectory-covariance on --out " +
+                          (dir / f).string());
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(lines(dir / f / "trajectory.tum"), 6969u) << f;
+    EXPECT_EQ(lines(dir / f / "trajectory_cov.csv"), 6970u) << f;  // header + one row per pose
     EXPECT_EQ(lines(dir / f / "map.csv"), 152u) << f;  // header + 151 landmarks
   }
   ASSERT_EQ(runCli("convert " + isam + " --to g2o --out " + (dir / "vp.g2o").string()).status, 0);

@@ -20,6 +20,7 @@ struct RunArgs {
   SeifFlags seif;
   double outlier_gate = FilterConfig{}.outlier_gate;
   std::string map_covariance = "exact";
+  std::string trajectory_covariance = "off";
   std::string command_line;
 };
 
@@ -41,6 +42,7 @@ void run(const RunArgs& args) {
   request.outlier_gate = args.outlier_gate;
   request.seif = args.seif.resolve();
   request.map_covariances = args.map_covariance == "exact";
+  request.trajectory_covariances = args.trajectory_covariance == "on";
   request.command_line = args.command_line;
   RunReport r;
   {
@@ -105,8 +107,20 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--robot", args->robot, "MRCLAM: robot number in the dataset")
       ->transform(integerIn(1, 5))
       ->capture_default_str();
-  cmd->add_option("--filter", args->filter, "ekf (dense covariance), eif (dense information) or seif")
-      ->check(CLI::IsMember({"ekf", "eif", "seif"}))
+  cmd->add_option("--filter", args->filter,
+                  "ekf (dense covariance), eif (dense information), seif, or batch (the MAP smoother\n"
+                  "over every pose and landmark: the reference), with options after a colon, e.g.\n"
+                  "seif:sparsify=eseif,linearization=fej (keys: linearization=standard|fej; for the\n"
+                  "seif sparsify=seif|eseif, active, relax, mean, deactivate, recovery, relax-order,\n"
+                  "covariance=exact|local, seed); options given here override the --active... flags")
+      ->check([](const std::string& s) -> std::string {
+        try {
+          parseFilterSpec(s);
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+        return {};
+      })
       ->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->capture_default_str();
   cmd->add_option("--outlier-gate", args->outlier_gate,
@@ -124,6 +138,13 @@ void addRunCommand(CLI::App& app) {
                   "one sparse factorisation of H at the end: at 10^6 landmarks it needs more memory "
                   "than the filter); none: id,x,y only")
       ->check(CLI::IsMember({"exact", "none"}))
+      ->capture_default_str();
+  cmd->add_option("--trajectory-covariance", args->trajectory_covariance,
+                  "on: write trajectory_cov.csv, the pose covariance after every step (EKF: a read;\n"
+                  "EIF: a solve, O(N^2); SEIF: one sparse factorisation per step - minutes on Victoria\n"
+                  "Park - or O(1) with seif:covariance=local, smaller than the marginal; batch: the\n"
+                  "smoother's marginals, 3 solves per pose); off: no file")
+      ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
   args->noise.add(*cmd);
   args->seif.add(*cmd);

@@ -52,6 +52,7 @@ void finish(SlamFilter& filter, RunOutput& out) {
                          " poses for " + std::to_string(out.trajectory.size()) + " steps");
     }
     for (std::size_t k = 0; k < smoothed.size(); ++k) out.trajectory[k].pose = smoothed[k];
+    if (!out.pose_covariances.empty()) out.pose_covariances = filter.smoothedTrajectoryCovariances();
   }
   out.final_stats = filter.stats();
   out.rejected_observations = filter.rejectedObservations();
@@ -178,7 +179,8 @@ bool StepAssembler::next(EventSource& source, Step& step, std::vector<TimedPose>
   return false;
 }
 
-RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function<void(double)>& progress) {
+RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function<void(double)>& progress,
+                    bool pose_covariances) {
   RunOutput out;
   StepAssembler steps;
   Step step;
@@ -189,8 +191,10 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
     if (k == 0) {
       out.trajectory.push_back({steps.startTime(), filter.pose()});
       out.dead_reckoning.push_back(out.trajectory.back());
+      if (pose_covariances) out.pose_covariances.push_back(filter.poseCovariance());
     }
     runStep(filter, step, k, out);
+    if (pose_covariances) out.pose_covariances.push_back(filter.poseCovariance());
     dead_reckoning = motion.apply(dead_reckoning, step.u);
     out.dead_reckoning.push_back({step.time, dead_reckoning});
     if (progress && k % 1024 == 0) progress(source.progress());

@@ -58,6 +58,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"seconds_wall", r.seconds_wall},
       {"seconds_trajectory_and_map", r.seconds_outputs},
       {"map_covariances", request.map_covariances},
+      {"trajectory_covariances", request.trajectory_covariances},
       {"us_per_step", out.steps == 0 ? 0.0 : 1e6 * out.seconds / steps},
       {"us_per_step_median", sorted.empty() ? 0.0 : 1e6 * sorted[sorted.size() / 2]},
       {"links", out.final_stats.links},
@@ -135,7 +136,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   config.sensor = source->info().sensor;
   config.outlier_gate = request.outlier_gate;
   auto filter = makeFilter(request.filter, source->info().start_pose, config, request.seif);
-  report.output = runFilter(*filter, *source, progress);
+  report.output = runFilter(*filter, *source, progress, request.trajectory_covariances);
   report.info = source->info();
   source.reset();
   if (report.output.steps == 0) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
@@ -147,6 +148,9 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   writeTum(out / "trajectory.tum", report.output.trajectory);
   writeTum(out / "dead_reckoning.tum", report.output.dead_reckoning);
   writeMapCsv(out / "map.csv", *filter, request.map_covariances);  // marginals computed here
+  if (request.trajectory_covariances) {
+    writeTrajectoryCovariance(out / "trajectory_cov.csv", report.output.trajectory, report.output.pose_covariances);
+  }
   report.seconds_outputs = secondsSince(write_start);
   writeFileAtomically(out / "metrics.json", metricsJson(request, report));
   return report;

@@ -62,11 +62,12 @@ FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, c
       else if (key == "deactivate") spec.seif.deactivate = SeifOptions::parseDeactivate(value);
       else if (key == "recovery") spec.seif.recovery = SeifOptions::parseRecovery(value);
       else if (key == "relax-order") spec.seif.relax_order = SeifOptions::parseRelaxOrder(value);
+      else if (key == "covariance") spec.seif.covariance = SeifOptions::parseCovariance(value);
       else if (key == "seed") spec.seif.seed = static_cast<std::uint64_t>(parseInt(text, key, value));
       else {
         badSpec(text, "unknown option '" + std::string(key) +
                           "' (seif takes linearization, sparsify, active, relax, mean, deactivate, "
-                          "recovery, relax-order, seed)");
+                          "recovery, relax-order, covariance, seed)");
       }
     } catch (const std::invalid_argument& e) {
       const std::string what = e.what();

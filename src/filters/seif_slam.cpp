@@ -44,6 +44,12 @@ SeifOptions::Sparsify SeifOptions::parseSparsify(std::string_view s) {
   throw std::invalid_argument("unknown sparsification '" + std::string(s) + "' (expected seif or eseif)");
 }
 
+SeifOptions::Covariance SeifOptions::parseCovariance(std::string_view s) {
+  if (s == "exact") return Covariance::Exact;
+  if (s == "local") return Covariance::Local;
+  throw std::invalid_argument("unknown covariance recovery '" + std::string(s) + "' (expected exact or local)");
+}
+
 SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const SeifOptions& options)
     : SlamFilter(config),
       config_(config),
@@ -227,10 +233,61 @@ Vec2 SeifSlam::landmark(int id) const { return store_.node(store_.index().requir
 
 // The marginals are read off the selected inverse of the cached factor (SparseMarginals):
 // H stores every robot and landmark diagonal block in full, so each lies in its pattern.
-Mat3 SeifSlam::poseCovariance() const { return factor().covarianceBlock<3>(0); }
+Mat3 SeifSlam::poseCovariance() const {
+  if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance(-1).topLeftCorner<3, 3>();
+  return factor().covarianceBlock<3>(0);
+}
 
 Mat2 SeifSlam::landmarkCovariance(int id) const {
-  return factor().covarianceBlock<2>(LandmarkIndex::stateIndex(store_.index().require(id, "seif")));
+  const int slot = store_.index().require(id, "seif");
+  if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance(slot).topLeftCorner<2, 2>();
+  return factor().covarianceBlock<2>(LandmarkIndex::stateIndex(slot));
+}
+
+Eigen::MatrixXd SeifSlam::localCovariance(int slot) const {
+  // The blanket: the variable first, then its neighbours (robot: the active landmarks;
+  // landmark: its linked landmarks, and the robot when it is active).
+  std::vector<int> slots;
+  bool robot = slot < 0;
+  if (robot) {
+    for (const SeifStore::RobotLink& l : store_.robotLinks()) slots.push_back(l.slot);
+  } else {
+    slots.push_back(slot);
+    for (const SeifStore::Link& l : store_.node(slot).links) slots.push_back(l.slot);
+    robot = store_.node(slot).active >= 0;
+  }
+  const Eigen::Index off = robot ? 3 : 0;
+  const Eigen::Index n = off + 2 * static_cast<Eigen::Index>(slots.size());
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+  if (robot) H.topLeftCorner<3, 3>() = store_.robotInformation();
+  for (std::size_t a = 0; a < slots.size(); ++a) {
+    const Eigen::Index i = off + 2 * static_cast<Eigen::Index>(a);
+    const SeifStore::Node& node = store_.node(slots[a]);
+    H.block<2, 2>(i, i) = node.H;
+    if (robot && node.active >= 0) {
+      const Mat32& Hxl = store_.robotLinks()[static_cast<std::size_t>(node.active)].H;
+      H.block<3, 2>(0, i) = Hxl;
+      H.block<2, 3>(i, 0) = Hxl.transpose();
+    }
+    for (std::size_t c = a + 1; c < slots.size(); ++c) {
+      if (const Mat2* link = store_.findLink(slots[a], slots[c])) {
+        const Eigen::Index j = off + 2 * static_cast<Eigen::Index>(c);
+        H.block<2, 2>(i, j) = *link;
+        H.block<2, 2>(j, i) = link->transpose();
+      }
+    }
+  }
+  const Eigen::LLT<Eigen::MatrixXd> llt(H);
+  if (llt.info() != Eigen::Success) {
+    throw NumericError("seif: the information of a Markov blanket is not positive definite (step " +
+                       std::to_string(store_.step()) + ")");
+  }
+  // The variable's block only: solve for its columns.
+  const Eigen::Index d = slot < 0 ? 3 : 2;
+  const Eigen::Index first = slot < 0 ? 0 : off;
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(n, d);
+  E.middleRows(first, d).setIdentity();
+  return llt.solve(E).middleRows(first, d);
 }
 
 Eigen::Matrix<double, Eigen::Dynamic, 2> SeifSlam::landmarkCovarianceColumns(int id) const {

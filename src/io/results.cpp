@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 
 namespace seif {
 
@@ -14,6 +16,22 @@ void writeTum(const std::filesystem::path& file, const std::vector<TimedPose>& t
     const double half = 0.5 * p.pose.z();
     std::fprintf(f.get(), "%.6f %.9g %.9g 0 0 0 %.9g %.9g\n", p.time, p.pose.x(), p.pose.y(),
                  std::sin(half), std::cos(half));
+  }
+  f.commit();
+}
+
+void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory,
+                               const std::vector<Mat3>& covariances) {
+  if (trajectory.size() != covariances.size()) {
+    throw std::invalid_argument("writeTrajectoryCovariance: " + std::to_string(trajectory.size()) + " poses but " +
+                                std::to_string(covariances.size()) + " covariances");
+  }
+  AtomicFile f(file);
+  std::fprintf(f.get(), "time,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt\n");
+  for (std::size_t k = 0; k < trajectory.size(); ++k) {
+    const Mat3& P = covariances[k];
+    std::fprintf(f.get(), "%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", trajectory[k].time, P(0, 0), P(0, 1), P(0, 2),
+                 P(1, 1), P(1, 2), P(2, 2));
   }
   f.commit();
 }

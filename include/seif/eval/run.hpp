@@ -20,6 +20,10 @@ struct RunOutput {
   std::size_t steps = 0;
   std::vector<TimedPose> trajectory;  ///< the start pose, then the pose after every step
   std::vector<double> step_seconds;   ///< wall time of every step (predict + update)
+  /// The pose covariance beside every trajectory pose, when asked for (runFilter's
+  /// pose_covariances): the filter's poseCovariance() after each step (its cost: see
+  /// SlamFilter), or a smoother's marginals after finish().
+  std::vector<Mat3> pose_covariances;
   double seconds = 0.0;               ///< sum of step_seconds
   FilterStats final_stats;
   std::size_t max_robot_links = 0;     ///< over all steps
@@ -71,7 +75,7 @@ class StepAssembler {
 /// filter is built from info()). `progress(fraction)` is called now and then.
 /// A failure inside a step is rethrown as NumericError naming the step and its time.
 RunOutput runFilter(SlamFilter& filter, EventSource& source,
-                    const std::function<void(double)>& progress = {});
+                    const std::function<void(double)>& progress = {}, bool pose_covariances = false);
 
 /// The pose the filter starts from: the ground truth at the first step's time when the
 /// dataset has ground truth, else the origin.

@@ -24,10 +24,13 @@ struct RunRequest {
   std::filesystem::path dataset;
   DatasetFormat format = DatasetFormat::Auto;
   DatasetOptions dataset_options;
-  std::string filter = "seif";  ///< "ekf" | "eif" | "seif"
+  std::string filter = "seif";  ///< a filter spec: "ekf", "eif", "seif", "batch", with options
   double outlier_gate = FilterConfig{}.outlier_gate;
   SeifOptions seif;
   bool map_covariances = true;  ///< map.csv with each landmark's exact marginal covariance
+  /// trajectory_cov.csv: the pose covariance after every step (SEIF: one factorisation per
+  /// step with covariance=exact; O(1) with covariance=local).
+  bool trajectory_covariances = false;
   std::string command_line;     ///< recorded in metrics.json
 };
 

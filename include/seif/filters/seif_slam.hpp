@@ -28,6 +28,7 @@ struct SeifOptions {
   enum class Recovery { AfterMeasurement, BeforeMeasurement };
   enum class RelaxOrder { Random, Cyclic };
   enum class Sparsify { Seif, Eseif };
+  enum class Covariance { Exact, Local };
 
   int max_active = 6;  ///< theta_x: landmarks linked to the robot after each step
   int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
@@ -54,12 +55,20 @@ struct SeifOptions {
   /// relocalises it from part of the current measurements (Walter, Eustice, Leonard 2007):
   /// H stays exactly sparse and nothing is conditioned away.
   Sparsify sparsify = Sparsify::Seif;
+  /// How poseCovariance() and landmarkCovariance() are recovered. Exact: from the sparse
+  /// Cholesky factor of H and its selected inverse, one factorisation per changed H (O(N)
+  /// at the paper's sparsity, cached: every marginal of one state costs it once). Local: the
+  /// inverse of H restricted to the variable's Markov blanket (the robot and the active
+  /// landmarks; a landmark and its neighbours), O(1): it conditions on everything outside,
+  /// so it is smaller than the marginal - an approximation for display, not for gating.
+  Covariance covariance = Covariance::Exact;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
   static Recovery parseRecovery(std::string_view s);      ///< "after-update" | "before-update"
   static RelaxOrder parseRelaxOrder(std::string_view s);  ///< "random" | "cyclic"
   static Sparsify parseSparsify(std::string_view s);      ///< "seif" | "eseif"
+  static Covariance parseCovariance(std::string_view s);  ///< "exact" | "local"
 };
 
 class SeifSlam final : public SlamFilter {
@@ -124,6 +133,8 @@ class SeifSlam final : public SlamFilter {
   Pose2 linearizationPose() const override { return store_.robotMean(); }
 
  private:
+  /// The covariance block of `slot` (-1: the robot) from H restricted to its Markov blanket.
+  Eigen::MatrixXd localCovariance(int slot) const;
   /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).
   void deactivateSurplus(bool solve_active_mean_first);
   void invalidateFactor();

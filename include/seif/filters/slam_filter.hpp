@@ -95,6 +95,8 @@ class SlamFilter {
   /// The smoothed pose of every step (the start pose first, then one per step), for a
   /// smoother after finish(); empty for a filter, whose trajectory is the pose after each step.
   virtual std::vector<Pose2> smoothedTrajectory() const { return {}; }
+  /// The marginal covariance of each smoothed pose, as smoothedTrajectory(); empty for a filter.
+  virtual std::vector<Mat3> smoothedTrajectoryCovariances() const { return {}; }
   /// True for a smoother: its estimates mean something only after finish().
   virtual bool smoother() const { return false; }
 

@@ -16,6 +16,11 @@ void writeTum(const std::filesystem::path& file, const std::vector<TimedPose>& t
 /// Header "id,x,y,cov_xx,cov_xy,cov_yy", one row per mapped landmark in map order; without
 /// `covariances`, "id,x,y" (the marginals cost the SEIF a sparse factorisation: memory
 /// beyond the filter's at 10^6 landmarks, README "Scale").
+/// trajectory_cov.csv: time and the upper triangle of each pose's covariance
+/// (time,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt; t = heading), one row per trajectory pose.
+void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory,
+                               const std::vector<Mat3>& covariances);
+
 void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter, bool covariances = true);
 
 }  // namespace seif
