@@ -105,8 +105,9 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--robot", args->robot, "MRCLAM: robot number in the dataset")
       ->transform(integerIn(1, 5))
       ->capture_default_str();
-  cmd->add_option("--filter", args->filter, "ekf (dense covariance), eif (dense information) or seif")
-      ->check(CLI::IsMember({"ekf", "eif", "seif"}))
+  cmd->add_option("--filter", args->filter, "ekf (dense covariance), eif (dense information), seif, or batch (the MAP over "
+                  "the whole run by Gauss-Newton at the end: trajectory.tum is the smoothed one)")
+      ->check(CLI::IsMember({"ekf", "eif", "seif", "batch"}))
       ->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->capture_default_str();
   cmd->add_option("--outlier-gate", args->outlier_gate,
