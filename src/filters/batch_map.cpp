@@ -8,6 +8,7 @@
 #include <Eigen/SparseCore>
 #include <Eigen/SparseLU>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -25,6 +26,8 @@ constexpr double kStepTolerance = 1e-10;     // max |delta| [m, rad]
 constexpr double kRelativeDecrease = 1e-12;  // of the merit function
 constexpr double kRankTolerance = 1e-12;     // eigenvalues below this * lambda_max are noise-free
 constexpr int kMaxHalvings = 40;
+constexpr double kFeasible = 1e-10;  // max |W^T r| of a converged solution
+constexpr double kDifferenceStep = 1e-5;  // for dU/dx [m, rad]
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
@@ -164,45 +167,76 @@ void BatchMap::linearize(const std::vector<Pose2>& poses, const std::vector<Vec2
   std::vector<double> c;
   out.cost = 0.0;
 
-  // A Gaussian term r ~ N(0, cov) on pose-space residual r with Jacobian blocks J_i (3x3)
-  // at variables v_i. cov = V diag(lambda) V^T: weight V_r diag(1/lambda_r) V_r^T (the
-  // pseudo-inverse) on its range, hard constraints W^T r = 0 on its null space.
-  const auto gaussian = [&](const Vec3& r, const Mat3& cov, std::initializer_list<std::pair<Eigen::Index, Mat3>> J) {
+  // A Gaussian term r ~ N(0, cov) on a pose-space residual r with Jacobian blocks J_i (3x3)
+  // at variables v_i. cov = V diag(lambda) V^T: weight Omega = V_r diag(1/lambda_r) V_r^T
+  // (the pseudo-inverse) on its range, hard constraints W^T r = 0 on its null space W.
+  // When cov depends on the first variable (dcov: its derivatives), the gradient carries
+  // d(r^T Omega r / 2) = -(Omega r)^T dcov (Omega r) / 2 and the constraint rows
+  // d(W^T r) = W^T dr - W^T dcov Omega r (from dW = -cov^+ dcov W; exact where W^T r = 0),
+  // so that the fixed point is the constrained optimum itself.
+  const auto gaussian = [&](const Vec3& r, const Mat3& cov, const std::array<Mat3, 3>* dcov,
+                            std::initializer_list<std::pair<Eigen::Index, Mat3>> J) {
     const Eigen::SelfAdjointEigenSolver<Mat3> eig(0.5 * (cov + cov.transpose()));
     const Vec3& lambda = eig.eigenvalues();
     const double tol = kRankTolerance * std::max(lambda.maxCoeff(), 1e-300);
     Mat3 omega = Mat3::Zero();
+    std::vector<Vec3> null;
     for (int i = 0; i < 3; ++i) {
       const Vec3 v = eig.eigenvectors().col(i);
       if (lambda(i) > tol) {
         omega += v * v.transpose() / lambda(i);
-        continue;
+      } else {
+        null.push_back(v);
       }
-      const double ci = v.dot(r);
-      c.push_back(ci);
+    }
+    const Vec3 omega_r = omega * r;
+    out.cost += r.dot(omega_r);
+    for (const Vec3& w : null) {
+      c.push_back(w.dot(r));
       if (!system) continue;
       const auto row = static_cast<Eigen::Index>(c.size()) - 1;
-      for (const auto& [var, Jv] : J) addBlock(C, row, var, Eigen::Matrix<double, 1, 3>(v.transpose() * Jv));
+      for (const auto& [var, Jv] : J) {
+        Eigen::Matrix<double, 1, 3> d = w.transpose() * Jv;
+        if (dcov && var == J.begin()->first) {
+          for (int i = 0; i < 3; ++i) d(i) -= w.dot((*dcov)[static_cast<std::size_t>(i)] * omega_r);
+        }
+        addBlock(C, row, var, d);
+      }
     }
-    out.cost += r.dot(omega * r);
     if (!system) return;
     for (const auto& [vi, Ji] : J) {
-      g.segment<3>(vi) += Ji.transpose() * omega * r;
+      g.segment<3>(vi) += Ji.transpose() * omega_r;
       for (const auto& [vj, Jj] : J) addBlock(A, vi, vj, Mat3(Ji.transpose() * omega * Jj));
+    }
+    if (dcov) {
+      for (int i = 0; i < 3; ++i) {
+        g(J.begin()->first + i) -= 0.5 * omega_r.dot((*dcov)[static_cast<std::size_t>(i)] * omega_r);
+      }
     }
   };
 
   Vec3 r0 = poses.front() - start_;
   r0(2) = wrapAngle(r0(2));
-  gaussian(r0, Mat3(config_.initial_pose_sigma.cwiseAbs2().asDiagonal()), {{0, Mat3::Identity()}});
+  gaussian(r0, Mat3(config_.initial_pose_sigma.cwiseAbs2().asDiagonal()), nullptr, {{0, Mat3::Identity()}});
 
+  // U_k depends on x_k; the MotionModel gives U, not its derivative: central differences.
   const MotionModel& motion = motionModel();
+  std::array<Mat3, 3> dU;
   for (std::size_t k = 0; k < inputs_.size(); ++k) {
     const MotionIncrement m = motion.linearize(poses[k], inputs_[k]);
     Vec3 r = poses[k + 1] - poses[k] - m.delta;
     r(2) = wrapAngle(r(2));
+    if (system) {
+      for (int i = 0; i < 3; ++i) {
+        const Vec3 e = kDifferenceStep * Vec3::Unit(i);
+        dU[static_cast<std::size_t>(i)] = (motion.linearize(Pose2(poses[k] + e), inputs_[k]).U -
+                                           motion.linearize(Pose2(poses[k] - e), inputs_[k]).U) /
+                                          (2.0 * kDifferenceStep);
+      }
+    }
     const auto i = 3 * static_cast<Eigen::Index>(k);
-    gaussian(r, m.U, {{i, Mat3(-(Mat3::Identity() + m.J_delta_x))}, {i + 3, Mat3::Identity()}});
+    gaussian(r, m.U, system ? &dU : nullptr,
+             {{i, Mat3(-(Mat3::Identity() + m.J_delta_x))}, {i + 3, Mat3::Identity()}});
   }
 
   const MeasurementModel& sensor = sensorModel();
@@ -322,8 +356,12 @@ void BatchMap::optimizeFrom(const std::vector<Pose2>& poses_in, const std::vecto
     }
     poses = std::move(trial_poses);
     landmarks = std::move(trial_landmarks);
+    const double cost0 = lin.cost;
     linearize(poses, landmarks, lin, true);
-    done = merit0 - merit(lin) <= kRelativeDecrease * merit0;
+    // Converged when F stalls on the constraint surface (mu |c|_1 is rounding noise there).
+    done = merit0 - merit(lin) <= kRelativeDecrease * merit0 ||
+           (std::abs(cost0 - lin.cost) <= kRelativeDecrease * cost0 &&
+            (lin.c.size() == 0 || lin.c.lpNorm<Eigen::Infinity>() < kFeasible));
   }
   iterations_ = it;
   cost_ = lin.cost;
