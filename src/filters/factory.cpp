@@ -1,3 +1,4 @@
+#include <seif/filters/batch_map.hpp>
 #include <seif/filters/eif_slam.hpp>
 #include <seif/filters/ekf_slam.hpp>
 #include <seif/filters/factory.hpp>
@@ -84,6 +85,7 @@ std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& star
   if (spec.name == "ekf") return std::make_unique<EkfSlam>(start, c);
   if (spec.name == "eif") return std::make_unique<EifSlam>(start, c);
   if (spec.name == "seif") return std::make_unique<SeifSlam>(start, c, spec.seif);
+  if (spec.name == "batch") return std::make_unique<BatchMap>(start, c);
   throw std::invalid_argument("unknown filter '" + spec.name + "' (expected ekf, eif, seif or batch)");
 }
 

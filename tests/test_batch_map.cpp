@@ -1,0 +1,245 @@
+// The batch MAP smoother: equal to the exact filter on a linear-Gaussian problem (with a
+// rank-2 process noise), one optimum from any start on the paper's world, better maps than
+// the EKF, and the smoother hooks of runFilter.
+#include <seif/core/angles.hpp>
+#include <seif/core/errors.hpp>
+#include <seif/eval/run.hpp>
+#include <seif/filters/batch_map.hpp>
+#include <seif/filters/eif_slam.hpp>
+#include <seif/filters/ekf_slam.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/models/range_bearing.hpp>
+#include <seif/sim/world.hpp>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <random>
+#include <variant>
+
+namespace {
+
+using namespace seif;
+
+double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return (a - b).norm() / std::max(1e-300, b.norm());
+}
+
+/// delta = the OdometryIncrement's (dx, dy, dth) in the WORLD frame: J_delta_x = 0, U constant.
+class LinearMotion final : public MotionModel {
+ public:
+  explicit LinearMotion(const Mat3& U) : U_(U) {}
+  std::string describe() const override { return "linear world-frame displacement"; }
+  MotionIncrement linearize(const Pose2&, const MotionInput& u) const override {
+    const auto* o = std::get_if<OdometryIncrement>(&u);
+    if (o == nullptr) throw ModelError("linear motion: needs an OdometryIncrement");
+    return {o->delta, Mat3::Zero(), U_};
+  }
+
+ private:
+  Mat3 U_;
+};
+
+/// z = y - (px, py), the landmark's world-frame offset: J_x = [-I 0], J_y = I.
+class LinearSensor final : public MeasurementModel {
+ public:
+  explicit LinearSensor(const Mat2& R) : MeasurementModel(R, Pose2::Zero()) {}
+  std::string describe() const override { return "linear world-frame offset"; }
+
+ protected:
+  Vec2 predictFromSensor(const Pose2& s, const Vec2& y, Mat23* J_s, Mat2* J_y) const override {
+    if (J_s) *J_s << -1, 0, 0, 0, -1, 0;
+    if (J_y) J_y->setIdentity();
+    return y - s.head<2>();
+  }
+  Vec2 inverseFromSensor(const Pose2& s, const Vec2& z, Mat23* J_y_s, Mat2* J_y_z) const override {
+    if (J_y_s) *J_y_s << 1, 0, 0, 0, 1, 0;
+    if (J_y_z) J_y_z->setIdentity();
+    return s.head<2>() + z;
+  }
+};
+
+TEST(BatchMap, EqualsTheExactFilterOnALinearGaussianProblemWithRank2ProcessNoise) {
+  // U = V diag(s1^2, s2^2, 0) V^T with V a rotation about a skew axis: the noise-free
+  // direction mixes x, y and theta.
+  const Mat3 V = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  const Mat3 U = V * Vec3(0.04, 0.01, 0.0).asDiagonal() * V.transpose();
+  Mat2 R;
+  R << 0.02, 0.005, 0.005, 0.01;
+  FilterConfig config;
+  config.motion = std::make_shared<LinearMotion>(U);
+  config.sensor = std::make_shared<LinearSensor>(R);
+  config.initial_pose_sigma = Vec3(0.1, 0.2, 0.05);
+
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  std::uniform_real_distribution<double> place(-4.0, 4.0);
+  std::vector<Vec2> landmarks;
+  for (int i = 0; i < 8; ++i) landmarks.emplace_back(place(rng), place(rng));
+  const Pose2 start(0.5, -1.0, 0.1);
+  Pose2 truth = start;
+  const Eigen::LLT<Mat2> chol_R(R);
+
+  EifSlam eif(start, config);
+  BatchMap batch(start, config);
+  for (int k = 0; k < 30; ++k) {
+    OdometryIncrement u;
+    u.delta = Vec3(0.3 * std::cos(0.2 * k), 0.3 * std::sin(0.2 * k), 0.02 * std::sin(0.5 * k));
+    truth += u.delta + V.leftCols<2>() * Vec2(0.2 * n01(rng), 0.1 * n01(rng));
+    std::vector<Observation> obs;
+    for (int i = 0; i < 8; ++i) {
+      if (((k + i) % 3) == 0) continue;  // each step sees a changing subset
+      const Vec2 noise = chol_R.matrixL() * Vec2(n01(rng), n01(rng));
+      obs.push_back({10 + i, Vec2(landmarks[static_cast<std::size_t>(i)] - truth.head<2>() + noise), std::nullopt});
+    }
+    eif.step(u, obs);
+    batch.step(u, obs);
+  }
+  batch.finish();
+  ASSERT_EQ(batch.landmarkIds(), eif.landmarkIds());
+  EXPECT_EQ(batch.landmarkIds().size(), 8u);
+  EXPECT_LT(batch.constraintViolation(), 1e-10);
+  EXPECT_LE(batch.iterations(), 3);
+  EXPECT_LT(relDiff(batch.pose(), eif.pose()), 1e-8);
+  EXPECT_LT(relDiff(batch.poseCovariance(), eif.poseCovariance()), 1e-8);
+  for (int id : eif.landmarkIds()) {
+    EXPECT_LT(relDiff(batch.landmark(id), eif.landmark(id)), 1e-8) << "landmark " << id;
+    EXPECT_LT(relDiff(batch.landmarkCovariance(id), eif.landmarkCovariance(id)), 1e-8) << "landmark " << id;
+  }
+  EXPECT_LT(relDiff(batch.mean(), eif.mean()), 1e-8);
+  EXPECT_LT(relDiff(batch.covariance(), eif.covariance()), 1e-8);
+  EXPECT_LT(relDiff(batch.information(), eif.information()), 1e-8);
+  const PredictedMeasurement a = batch.predictMeasurement(12, batch.sensorModel(), R);
+  const PredictedMeasurement b = eif.predictMeasurement(12, eif.sensorModel(), R);
+  EXPECT_LT(relDiff(a.z, b.z), 1e-8);
+  EXPECT_LT(relDiff(a.S, b.S), 1e-8);
+  // The smoothed pose at the start is not the filter's (it has seen the whole run), but
+  // its covariance is bounded by the prior's.
+  const std::vector<Mat3> P = batch.trajectoryCovariances();
+  ASSERT_EQ(P.size(), 31u);
+  EXPECT_LT(relDiff(P.back(), eif.poseCovariance()), 1e-8);
+  EXPECT_LE(P.front()(0, 0), 0.1 * 0.1 * (1 + 1e-12));
+}
+
+struct PaperData {
+  Dataset data;
+  FilterConfig config;
+  Pose2 start;
+};
+
+PaperData paperData(std::uint64_t seed, PaperPath path) {
+  WorldConfig world = presetConfig(WorldPreset::Paper, 0, 0, seed);
+  world.paper_path = path;
+  PaperData p;
+  p.data = buildDataset(simulate(world));
+  p.config.noise = p.data.noise.value_or(world.noise);
+  p.start = startPose(p.data);
+  return p;
+}
+
+std::vector<Pose2> truePoses(const Dataset& data) {
+  std::vector<Pose2> poses{interpolatePose(data.groundtruth, data.start_time)};
+  for (const Step& s : data.steps) poses.push_back(interpolatePose(data.groundtruth, s.time));
+  return poses;
+}
+
+std::vector<Vec2> trueLandmarks(const SlamFilter& filter, const Dataset& data) {
+  std::vector<Vec2> out;
+  for (int id : filter.landmarkIds()) out.push_back(data.landmarks.at(id));
+  return out;
+}
+
+double landmarkMse(const SlamFilter& filter, const Dataset& data) {
+  double sum = 0.0;
+  for (int id : filter.landmarkIds()) sum += (filter.landmark(id) - data.landmarks.at(id)).squaredNorm();
+  return sum / static_cast<double>(filter.landmarkIds().size());
+}
+
+TEST(BatchMap, ReachesTheSameOptimumFromTheEkfAndFromTheTruthOnThePaperWorld) {
+  for (PaperPath path : {PaperPath::Lawnmower, PaperPath::Lissajous}) {
+    const PaperData p = paperData(3, path);
+    BatchMap batch(p.start, p.config);
+    const auto t0 = std::chrono::steady_clock::now();
+    runFilter(batch, p.data);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("paper world (%s): %zu steps, %zu landmarks, %d iterations, cost %.6g, %.3f s\n",
+                std::string(paperPathName(path)).c_str(), p.data.steps.size(), batch.landmarkIds().size(),
+                batch.iterations(), batch.cost(), seconds);
+    const std::vector<Pose2> from_ekf = batch.smoothedTrajectory();
+    std::vector<Vec2> map_from_ekf;
+    for (int id : batch.landmarkIds()) map_from_ekf.push_back(batch.landmark(id));
+    const double cost_from_ekf = batch.cost();
+    EXPECT_LT(batch.constraintViolation(), 1e-10);
+
+    batch.optimizeFrom(truePoses(p.data), trueLandmarks(batch, p.data));
+    std::printf("  from the truth: %d iterations, cost %.6g\n", batch.iterations(), batch.cost());
+    EXPECT_LT(batch.constraintViolation(), 1e-10);
+    EXPECT_NEAR(batch.cost(), cost_from_ekf, 1e-9 * cost_from_ekf);
+    const std::vector<Pose2> from_truth = batch.smoothedTrajectory();
+    ASSERT_EQ(from_truth.size(), from_ekf.size());
+    double worst = 0.0;
+    for (std::size_t k = 0; k < from_ekf.size(); ++k) {
+      Vec3 d = from_truth[k] - from_ekf[k];
+      d(2) = wrapAngle(d(2));
+      worst = std::max(worst, d.cwiseAbs().maxCoeff());
+    }
+    for (std::size_t s = 0; s < map_from_ekf.size(); ++s) {
+      worst = std::max(worst, (batch.landmark(batch.landmarkIds()[s]) - map_from_ekf[s]).cwiseAbs().maxCoeff());
+    }
+    EXPECT_LT(worst, 1e-6) << paperPathName(path);
+  }
+}
+
+TEST(BatchMap, BeatsTheEkfOnThePaperWorld) {
+  double batch_mse = 0.0, ekf_mse = 0.0;
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    const PaperData p = paperData(seed, PaperPath::Lawnmower);
+    EkfSlam ekf(p.start, p.config);
+    BatchMap batch(p.start, p.config);
+    const RunOutput ekf_run = runFilter(ekf, p.data);
+    runFilter(batch, p.data);
+    batch_mse += landmarkMse(batch, p.data) / 5.0;
+    ekf_mse += landmarkMse(ekf, p.data) / 5.0;
+    // The cost at the EKF's filtered trajectory and map (which breaks the noise-free
+    // directions of the motion) is higher than at the MAP.
+    std::vector<Pose2> ekf_poses;
+    for (const TimedPose& x : ekf_run.trajectory) ekf_poses.push_back(x.pose);
+    std::vector<Vec2> ekf_map;
+    for (int id : ekf.landmarkIds()) ekf_map.push_back(ekf.landmark(id));
+    double violation = 0.0;
+    const double ekf_cost = batch.costAt(ekf_poses, ekf_map, &violation);
+    std::printf("seed %d: cost at the MAP %.6g, at the EKF's estimates %.6g (violation %.3g)\n",
+                static_cast<int>(seed), batch.cost(), ekf_cost, violation);
+    EXPECT_LE(batch.cost(), ekf_cost) << "seed " << seed;
+  }
+  std::printf("landmark MSE over 5 seeds: batch %.4g, ekf %.4g\n", batch_mse, ekf_mse);
+  EXPECT_LT(batch_mse, ekf_mse);
+}
+
+TEST(BatchMap, NeedsTheMotionInputAndTheConfigSensor) {
+  BatchMap batch(Pose2::Zero(), FilterConfig{});
+  EXPECT_THROW(batch.predict(MotionIncrement{}), ModelError);
+  const RangeBearingModel other(0.1, 0.1);
+  const std::vector<Observation> obs{{1, Vec2(1.0, 0.2), std::nullopt}};
+  EXPECT_THROW(batch.update(obs, other), ModelError);
+  EXPECT_THROW(batch.trajectoryCovariances(), std::logic_error);
+  EXPECT_TRUE(batch.smoothedTrajectory().empty());
+}
+
+TEST(BatchMap, RunFilterReportsTheSmoothedTrajectory) {
+  const PaperData p = paperData(2, PaperPath::Lawnmower);
+  auto filter = makeFilter("batch", p.start, p.config);
+  EXPECT_EQ(filter->name(), "batch");
+  const RunOutput out = runFilter(*filter, p.data);
+  const std::vector<Pose2> smoothed = filter->smoothedTrajectory();
+  ASSERT_EQ(out.trajectory.size(), p.data.steps.size() + 1);
+  ASSERT_EQ(smoothed.size(), out.trajectory.size());
+  for (std::size_t k = 0; k < smoothed.size(); ++k) EXPECT_EQ(out.trajectory[k].pose, smoothed[k]) << k;
+  EXPECT_EQ(filter->pose(), smoothed.back());
+  EXPECT_EQ(out.final_stats.landmarks, filter->landmarkIds().size());
+  EXPECT_GT(out.final_stats.links, p.data.steps.size());
+}
+
+}  // namespace
