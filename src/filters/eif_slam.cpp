@@ -12,6 +12,7 @@ EifSlam::EifSlam(const Pose2& initial_pose, const FilterConfig& config)
     : SlamFilter(config), config_(config), gate_(config.outlier_gate), H_(Mat3::Zero()), b_(Vec3::Zero()), mu_(initial_pose) {
   H_.diagonal() = config.initial_pose_sigma.cwiseAbs2().cwiseInverse();
   b_ = H_ * mu_;
+  if (config.linearization == Linearization::FirstEstimates) fej_.emplace(initial_pose);
 }
 
 Pose2 EifSlam::pose() const { return wrapHeading(Pose2(mu_.head<3>())); }
@@ -67,7 +68,8 @@ PredictedMeasurement EifSlam::predictMeasurement(int id, const MeasurementModel&
                     cols.block<3, 2>(0, 3), cols.block<2, 2>(i, 3), R);
 }
 
-void EifSlam::predict(const MotionIncrement& m) {
+void EifSlam::predict(const MotionIncrement& increment) {
+  const MotionIncrement m = fej_ ? fej_->fejIncrement(increment, mu_.head<2>()) : increment;
   Eigen::MatrixXd workspace(6, H_.cols());
   informationMotionUpdate(H_, b_, mu_, m.delta, m.J_delta_x, m.U, workspace);
   llt_valid_ = false;
@@ -93,15 +95,19 @@ void EifSlam::update(std::span<const Observation> observations, const Measuremen
     b_.tail<2>().setZero();
     mu_.conservativeResize(n + 2);
     mu_.tail<2>() = y;
+    if (fej_) fej_->addLandmark(y);
   }
-  // Paper eq. (21-22), all observations linearised at the prior mean; gross outliers
-  // (OutlierGate) are dropped.
+  // Paper eq. (21-22), all observations linearised at the prior mean (with FEJ: each
+  // landmark's Jacobians at its first estimate); gross outliers (OutlierGate) are dropped.
   const Pose2 x = mu_.head<3>();
   for (const Observation& z : observations) {
-    const Eigen::Index l = LandmarkIndex::stateIndex(index_.find(z.landmark));
+    const int slot = index_.find(z.landmark);
+    const Eigen::Index l = LandmarkIndex::stateIndex(slot);
     const Mat2 Z_inv = sensor.noise(z).inverse();
     if (gate_.rejects(sensor, x, mu_.segment<2>(l), z, Z_inv)) continue;
-    const MeasurementInformation info = measurementInformation(sensor, x, mu_.segment<2>(l), z, Z_inv);
+    const MeasurementInformation info =
+        measurementInformation(sensor, x, mu_.segment<2>(l), z, Z_inv,
+                               fej_ ? std::optional<Vec2>(fej_->landmark(slot)) : std::nullopt);
     H_.topLeftCorner<3, 3>() += info.H.topLeftCorner<3, 3>();
     H_.block<3, 2>(0, l) += info.H.topRightCorner<3, 2>();
     H_.block<2, 3>(l, 0) += info.H.bottomLeftCorner<2, 3>();

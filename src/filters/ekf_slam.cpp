@@ -12,6 +12,7 @@ namespace seif {
 EkfSlam::EkfSlam(const Pose2& initial_pose, const FilterConfig& config)
     : SlamFilter(config), config_(config), gate_(config.outlier_gate), mu_(initial_pose), sigma_(Mat3::Zero()) {
   sigma_.diagonal() = config.initial_pose_sigma.cwiseAbs2();
+  if (config.linearization == Linearization::FirstEstimates) fej_.emplace(initial_pose);
 }
 
 Pose2 EkfSlam::pose() const { return wrapHeading(Pose2(mu_.head<3>())); }
@@ -41,7 +42,8 @@ PredictedMeasurement EkfSlam::predictMeasurement(int id, const MeasurementModel&
                     sigma_.block<3, 2>(0, i), sigma_.block<2, 2>(i, i), R);
 }
 
-void EkfSlam::predict(const MotionIncrement& m) {
+void EkfSlam::predict(const MotionIncrement& increment) {
+  const MotionIncrement m = fej_ ? fej_->fejIncrement(increment, mu_.head<2>()) : increment;
   const Mat3& U = m.U;
   const Vec3& delta = m.delta;
   const Mat3 G = Mat3::Identity() + m.J_delta_x;
@@ -63,6 +65,7 @@ void EkfSlam::addLandmark(const Observation& z, const MeasurementModel& sensor) 
   index_.add(z.landmark);
   mu_.conservativeResize(n + 2);
   mu_.tail<2>() = y;
+  if (fej_) fej_->addLandmark(y);
   const Eigen::MatrixXd cross = G_x * sigma_.topRows<3>();  // 2 x n
   sigma_.conservativeResize(n + 2, n + 2);
   sigma_.bottomLeftCorner(2, n) = cross;
@@ -73,7 +76,8 @@ void EkfSlam::addLandmark(const Observation& z, const MeasurementModel& sensor) 
 
 void EkfSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
   // A landmark's first observation initialises it (and carries no other information);
-  // all other observations form one joint update linearised at the prior mean.
+  // all other observations form one joint update linearised at the prior mean (with FEJ:
+  // each landmark's Jacobians at its first estimate, Huang et al. 2010 eq. 32).
   // Gross outliers (OutlierGate) are dropped first.
   std::vector<const Observation*> updates;
   updates.reserve(observations.size());
@@ -100,8 +104,10 @@ void EkfSlam::update(std::span<const Observation> observations, const Measuremen
   const Pose2 x = mu_.head<3>();
   for (std::size_t k = 0; k < updates.size(); ++k) {
     const Observation& z = *updates[k];
-    li[k] = LandmarkIndex::stateIndex(index_.find(z.landmark));
+    const int slot = index_.find(z.landmark);
+    li[k] = LandmarkIndex::stateIndex(slot);
     const Vec2 zhat = sensor.predict(x, mu_.segment<2>(li[k]), &Jx[k], &Jy[k]);
+    if (fej_) sensor.predict(x, fej_->landmark(slot), &Jx[k], &Jy[k]);
     nu.segment<2>(2 * static_cast<Eigen::Index>(k)) = sensor.residual(z.z, zhat);
     PJt.middleCols<2>(2 * static_cast<Eigen::Index>(k)) =
         sigma_.leftCols<3>() * Jx[k].transpose() + sigma_.middleCols<2>(li[k]) * Jy[k].transpose();

@@ -62,6 +62,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
                                 std::to_string(kMaxLocalLandmarks - 1));
   }
   if (options.relax < 0) throw std::invalid_argument("seif: --relax must be >= 0");
+  if (config.linearization == Linearization::FirstEstimates) fej_.emplace(initial_pose);
   order_.reserve(kMaxLocalLandmarks + 1);
   ranking_.reserve(kMaxLocalLandmarks + 1);
 }
@@ -74,7 +75,8 @@ void SeifSlam::invalidateFactor() { factor_.reset(); }
 
 void SeifSlam::predict(const MotionIncrement& increment) { motionUpdate(increment); }
 
-void SeifSlam::motionUpdate(const MotionIncrement& m) {
+void SeifSlam::motionUpdate(const MotionIncrement& increment) {
+  const MotionIncrement m = fej_ ? fej_->fejIncrement(increment, store_.robotMean().head<2>()) : increment;
   store_.beginStep();
   last_sparsification_residual_ = 0.0;
   // §1: Lemma 3 on the {robot, active} block, the only part of H that motion changes.
@@ -129,7 +131,8 @@ void SeifSlam::relaxMean(int sweeps) {
 
 void SeifSlam::measurementUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
   invalidateFactor();
-  // §3, paper eq. (21-22): every observation linearised at the current mean.
+  // §3, paper eq. (21-22): every observation linearised at the current mean (with FEJ:
+  // each landmark's Jacobians at its first estimate, Huang et al. 2010 eq. 32).
   for (const Observation& z : observations) {
     requireAssociated(z, "seif");
     const Mat2 Z_inv = sensor.noise(z).inverse();
@@ -137,10 +140,13 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
     int slot = store_.index().find(z.landmark);
     if (slot < 0) {  // a new landmark: no information yet, mean from the inverse model
       slot = store_.addLandmark(z.landmark, sensor.inverse(x, z.z));
+      if (fej_) fej_->addLandmark(store_.node(slot).mu);
     } else if (gate_.rejects(sensor, x, store_.node(slot).mu, z, Z_inv)) {
       continue;  // a gross outlier (OutlierGate)
     }
-    const MeasurementInformation info = measurementInformation(sensor, x, store_.node(slot).mu, z, Z_inv);
+    const MeasurementInformation info =
+        measurementInformation(sensor, x, store_.node(slot).mu, z, Z_inv,
+                               fej_ ? std::optional<Vec2>(fej_->landmark(slot)) : std::nullopt);
     store_.addObservation(slot, info.H, info.b);  // links it to the robot: active
     // A batch larger than the local block would allow is sparsified as it comes.
     if (static_cast<int>(store_.robotLinks().size()) >= kMaxLocalLandmarks) sparsify();

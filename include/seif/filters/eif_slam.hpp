@@ -3,12 +3,14 @@
 // vector b (algorithm.md "The exact information filter"). Motion update in the closed
 // form of paper Lemma 3 on the full matrix, measurement update paper eq. (21-22), and the
 // mean recovered exactly by a Cholesky solve of H mu = b. Algebraically the EKF.
+#include <seif/filters/first_estimates.hpp>
 #include <seif/filters/landmark_index.hpp>
 #include <seif/filters/outlier_gate.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <optional>
 
 namespace seif {
 
@@ -52,6 +54,7 @@ class EifSlam final : public SlamFilter {
   FilterConfig config_;
   OutlierGate gate_;
   LandmarkIndex index_;
+  std::optional<FirstEstimates> fej_;  // with Linearization::FirstEstimates
   Eigen::MatrixXd H_;
   Eigen::VectorXd b_;
   Eigen::VectorXd mu_;

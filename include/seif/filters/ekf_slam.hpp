@@ -3,11 +3,13 @@
 // update). New landmarks are initialised through the inverse-model Jacobians, and all
 // observations of one instant are applied jointly at one linearisation point, so that the
 // EKF and the EIF give the same posterior to rounding (algorithm.md "Models", "EIF").
+#include <seif/filters/first_estimates.hpp>
 #include <seif/filters/landmark_index.hpp>
 #include <seif/filters/outlier_gate.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Core>
+#include <optional>
 
 namespace seif {
 
@@ -52,6 +54,7 @@ class EkfSlam final : public SlamFilter {
   FilterConfig config_;
   OutlierGate gate_;
   LandmarkIndex index_;
+  std::optional<FirstEstimates> fej_;  // with Linearization::FirstEstimates
   Eigen::VectorXd mu_;     // heading kept unwrapped in the state; pose() wraps it
   Eigen::MatrixXd sigma_;
 };

@@ -5,6 +5,7 @@
 #include <seif/models/measurement_model.hpp>
 
 #include <Eigen/Core>
+#include <optional>
 
 namespace seif {
 
@@ -45,12 +46,16 @@ double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Vect
 /// Information added by one observation, paper eq. (21-22), ordered [robot (3),
 /// landmark (2)]:  dH = J^T Z^-1 J,  db = J^T Z^-1 (z - zhat + J mu), linearised at the
 /// robot mean x and landmark mean y; z - zhat is the sensor's residual (bearing wrapped).
+/// With `jacobian_landmark` (first-estimates Jacobians, Huang et al. 2010 eq. 32) J is
+/// evaluated at (x, jacobian_landmark) instead, while zhat = h(x, y) and the mean in
+/// J mu stay the current ones: db = J^T Z^-1 (z - h(x, y) + J [x; y]).
 struct MeasurementInformation {
   Eigen::Matrix<double, 5, 5> H;
   Eigen::Matrix<double, 5, 1> b;
 };
 MeasurementInformation measurementInformation(const MeasurementModel& sensor, const Pose2& x,
-                                              const Vec2& y, const Observation& z, const Mat2& Z_inv);
+                                              const Vec2& y, const Observation& z, const Mat2& Z_inv,
+                                              const std::optional<Vec2>& jacobian_landmark = std::nullopt);
 
 /// Counts the links of a dense information matrix in the state order [robot, landmarks]:
 /// non-zero off-diagonal blocks, the robot's links and the largest landmark degree.

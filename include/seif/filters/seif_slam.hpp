@@ -7,6 +7,7 @@
 //   update(z)   : mean recovery (amortised coordinate descent, eq. 42), measurement update
 //                 (Lemma 1, eq. 21-22), sparsification (eq. 44-51) when more than
 //                 max_active landmarks are active.
+#include <seif/filters/first_estimates.hpp>
 #include <seif/filters/information_ops.hpp>
 #include <seif/filters/outlier_gate.hpp>
 #include <seif/filters/seif_store.hpp>
@@ -15,6 +16,7 @@
 #include <Eigen/SparseCore>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <random>
 #include <string_view>
 
@@ -143,6 +145,7 @@ class SeifSlam final : public SlamFilter {
   OutlierGate gate_;
   SeifOptions options_;
   SeifStore store_;
+  std::optional<FirstEstimates> fej_;  // with Linearization::FirstEstimates
   std::mt19937_64 rng_;
   std::size_t relax_cursor_ = 0;  // next landmark of a cyclic relaxation
   double last_sparsification_residual_ = 0.0;
