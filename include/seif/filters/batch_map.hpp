@@ -47,6 +47,9 @@ class BatchMap final : public SlamFilter {
   void finish() override;
   /// The T + 1 smoothed poses (heading wrapped); empty before finish().
   std::vector<Pose2> smoothedTrajectory() const override;
+  /// trajectoryCovariances(): O(T) solves.
+  std::vector<Mat3> smoothedTrajectoryCovariances() const override { return trajectoryCovariances(); }
+  bool smoother() const override { return true; }
 
   /// Gauss-Newton from any initial guess: one pose per step plus the start, landmarks in
   /// state order. Throws std::invalid_argument for wrong sizes, NumericError as finish().
