@@ -12,9 +12,8 @@
 namespace seif {
 
 namespace {
-// ESEIF relocalisation (Walter et al. 2007): at most this many landmarks in z_beta, and the
-// largest condition number of their stacked pose information J_x^T R^-1 J_x it accepts.
-constexpr std::size_t kMaxBeta = 4;
+// ESEIF relocalisation (Walter et al. 2007): the largest condition number of z_beta's
+// stacked pose information J_x^T R^-1 J_x it accepts.
 constexpr double kMaxRelocalizationCondition = 1e6;
 constexpr int kRelocalizationIterations = 20;
 enum Role : unsigned char { kAlpha, kBeta, kRejected };
@@ -71,12 +70,13 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
                                 std::to_string(kMaxLocalLandmarks - 1));
   }
   if (options.relax < 0) throw std::invalid_argument("seif: --relax must be >= 0");
+  if (options.eseif_beta < 2) throw std::invalid_argument("seif: eseif beta must be >= 2");
   order_.reserve(kMaxLocalLandmarks + 1);
   ranking_.reserve(kMaxLocalLandmarks + 1);
   if (options.sparsify == SeifOptions::Sparsify::Eseif) {
     alpha_.reserve(kMaxLocalLandmarks + 1);
-    beta_.reserve(kMaxBeta);
-    beta_slots_.reserve(kMaxBeta);
+    beta_.reserve(static_cast<std::size_t>(options.max_active));
+    beta_slots_.reserve(static_cast<std::size_t>(options.max_active));
     roles_.reserve(kMaxLocalLandmarks + 1);
   }
 }
@@ -261,9 +261,9 @@ bool SeifSlam::exceedsActive(std::span<const Observation> z) const {
 
 bool SeifSlam::partitionObservations(std::span<const Observation> z, const MeasurementModel& sensor) {
   // Candidates for z_beta: observations of mapped landmarks, the best informed (largest
-  // trace of H_ll) first. z_beta takes the fewest of them (two for a 2-D point sensor) whose
-  // stacked sum J_x^T R^-1 J_x fixes all three pose dof, well conditioned; at most
-  // max_active of them, so that the relocalised robot's active set is within bounds.
+  // trace of H_ll) first. z_beta takes eseif_beta of them, or more until their stacked
+  // sum J_x^T R^-1 J_x fixes all three pose dof, well conditioned; at most max_active, so
+  // that the relocalised robot's active set is within bounds.
   alpha_.clear();
   beta_.clear();
   beta_slots_.clear();
@@ -275,12 +275,13 @@ bool SeifSlam::partitionObservations(std::span<const Observation> z, const Measu
     if (slot >= 0) ranking_.emplace_back(-store_.node(slot).H.trace(), static_cast<int>(i));
   }
   std::sort(ranking_.begin(), ranking_.end());
-  const std::size_t max_beta = std::min(kMaxBeta, static_cast<std::size_t>(options_.max_active));
+  const auto max_beta = static_cast<std::size_t>(options_.max_active);
+  const auto target = std::min(static_cast<std::size_t>(options_.eseif_beta), max_beta);
   const Pose2 x = store_.robotMean();
   Mat3 A = Mat3::Zero();
   bool found = false;
   for (const auto& [score, i] : ranking_) {
-    if (found || beta_.size() == max_beta) break;
+    if ((found && beta_.size() >= target) || beta_.size() == max_beta) break;
     const Observation& o = z[static_cast<std::size_t>(i)];
     const int slot = store_.index().find(o.landmark);
     if (std::find(beta_slots_.begin(), beta_slots_.end(), slot) != beta_slots_.end()) continue;

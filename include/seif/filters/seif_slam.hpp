@@ -54,6 +54,12 @@ struct SeifOptions {
   /// relocalises it from part of the current measurements (Walter, Eustice, Leonard 2007):
   /// H stays exactly sparse and nothing is conditioned away.
   Sparsify sparsify = Sparsify::Seif;
+  /// Eseif: how many landmarks' observations relocalise the robot (z_beta), best informed
+  /// first, when the step has that many: >= 2 (a 2-D point sensor's least for the 3-dof
+  /// pose); fewer when the step has fewer (but 2), more while the pose is ill-conditioned,
+  /// never more than max_active. More give a better relocalised pose (docs: the paper's
+  /// world's map error is several times smaller with 4 than with 2).
+  int eseif_beta = 2;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
