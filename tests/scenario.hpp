@@ -18,10 +18,11 @@ struct Scenario {
   NoiseModel noise;
 };
 
+/// `noise_scale` multiplies every noise sigma (smaller: a more nearly linear problem).
 inline Scenario makeScenario(std::uint64_t seed, int landmarks, int steps,
-                             double sensor_range = 3.0) {
+                             double sensor_range = 3.0, double noise_scale = 1.0) {
   Scenario s;
-  s.noise = {0.05, 0.02, 0.05, 0.02};
+  s.noise = {0.05 * noise_scale, 0.02 * noise_scale, 0.05 * noise_scale, 0.02 * noise_scale};
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> radius(2.0, 8.0), angle(-3.14159, 3.14159);
   std::normal_distribution<double> n01(0.0, 1.0);

@@ -58,6 +58,7 @@ FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, c
       if (spec.name != "seif") badSpec(text, "unknown option '" + std::string(key) + "' for " + spec.name);
       if (key == "sparsify") spec.seif.sparsify = SeifOptions::parseSparsify(value);
       else if (key == "active") spec.seif.max_active = parseInt(text, key, value);
+      else if (key == "beta") spec.seif.eseif_beta = parseInt(text, key, value);
       else if (key == "relax") spec.seif.relax = parseInt(text, key, value);
       else if (key == "mean") spec.seif.mean = SeifOptions::parseMean(value);
       else if (key == "deactivate") spec.seif.deactivate = SeifOptions::parseDeactivate(value);
@@ -67,7 +68,7 @@ FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, c
       else if (key == "seed") spec.seif.seed = static_cast<std::uint64_t>(parseInt(text, key, value));
       else {
         badSpec(text, "unknown option '" + std::string(key) +
-                          "' (seif takes linearization, sparsify, active, relax, mean, deactivate, "
+                          "' (seif takes linearization, sparsify, beta, active, relax, mean, deactivate, "
                           "recovery, relax-order, covariance, seed)");
       }
     } catch (const std::invalid_argument& e) {

@@ -92,6 +92,35 @@ double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Vect
   return H.block(0, y0, 3, d).cwiseAbs().maxCoeff() / scale;
 }
 
+void marginalizeRobot(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b) {
+  const Eigen::Index n = H.rows();
+  const Eigen::Index m = n - 3;
+  if (n > kMaxLocalDim || n < 3) {
+    throw NumericError("robot marginalisation: bad block size (" + std::to_string(n) + " rows)");
+  }
+  Eigen::LLT<Mat3> llt_x(H.topLeftCorner<3, 3>());
+  if (llt_x.info() != Eigen::Success) {
+    throw NumericError("robot marginalisation: the robot's information is not positive definite");
+  }
+  // W = H_xx^-1 [H_xA, b_x]; then H_AA -= H_Ax W_A, b_A -= H_Ax W_b.
+  Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim> W(3, m + 1);
+  W.leftCols(m) = H.topRightCorner(3, m);
+  W.col(m) = b.head<3>();
+  llt_x.solveInPlace(W);
+  H.bottomRightCorner(m, m).noalias() -= H.bottomLeftCorner(m, 3) * W.leftCols(m);
+  b.tail(m).noalias() -= H.bottomLeftCorner(m, 3) * W.col(m);
+  for (Eigen::Index j = 3; j < n; ++j) {  // symmetric up to rounding: restore it exactly
+    for (Eigen::Index i = j + 1; i < n; ++i) {
+      const double v = 0.5 * (H(i, j) + H(j, i));
+      H(i, j) = v;
+      H(j, i) = v;
+    }
+  }
+  H.topRows<3>().setZero();
+  H.leftCols<3>().setZero();
+  b.head<3>().setZero();
+}
+
 MeasurementInformation measurementInformation(const MeasurementModel& sensor, const Pose2& x,
                                               const Vec2& y, const Observation& z, const Mat2& Z_inv,
                                               const std::optional<Vec2>& jacobian_landmark) {

@@ -76,6 +76,14 @@ void SeifStore::removeRobotLink(int slot) {
   robot_links_.pop_back();
 }
 
+void SeifStore::detachRobot(const Vec3& mu_x) {
+  for (const RobotLink& l : robot_links_) nodes_[static_cast<std::size_t>(l.slot)].active = -1;
+  robot_links_.clear();
+  H_xx_.setZero();
+  b_x_.setZero();
+  mu_x_ = mu_x;
+}
+
 void SeifStore::setMean(const Eigen::VectorXd& mu) {
   mu_x_ = mu.head<3>();
   for (int s = 0; s < size(); ++s) nodes_[static_cast<std::size_t>(s)].mu = mu.segment<2>(LandmarkIndex::stateIndex(s));

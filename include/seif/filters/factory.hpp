@@ -19,7 +19,7 @@ struct FilterSpec {
 };
 
 /// Parses "name[:key=value,...]". Keys: linearization=standard|fej (every filter but the
-/// batch); for the SEIF sparsify=seif|eseif, active=N, relax=K, mean=amortized|exact,
+/// batch); for the SEIF sparsify=seif|eseif, beta=B (eseif), active=N, relax=K, mean=amortized|exact,
 /// deactivate=weakest|oldest, recovery=before-update|after-update, relax-order=cyclic|random,
 /// covariance=exact|local, seed=S. Unset keys keep `linearization` and `seif`. Throws std::invalid_argument naming
 /// the spec and what is wrong (unknown name, key or value; a key the filter does not take).

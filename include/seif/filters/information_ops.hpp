@@ -43,6 +43,15 @@ using LocalVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kM
 double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
                            const Eigen::Ref<const Eigen::VectorXd>& mu, int drop);
 
+/// ESEIF sparsification, its marginalisation (Walter, Eustice, Leonard 2007), on a dense
+/// block whose first three rows are the robot and which holds its whole Markov blanket
+/// (every variable linked to it): the Schur complement over the robot
+///   H_AA <- H_AA - H_Ax H_xx^-1 H_xA,   b_A <- b_A - H_Ax H_xx^-1 b_x,
+/// after which the robot's rows, columns and b entries are zero. The other variables'
+/// marginal is unchanged. At most kMaxLocalDim rows; allocates nothing. Throws NumericError
+/// if H_xx is not positive definite.
+void marginalizeRobot(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b);
+
 /// Information added by one observation, paper eq. (21-22), ordered [robot (3),
 /// landmark (2)]:  dH = J^T Z^-1 J,  db = J^T Z^-1 (z - zhat + J mu), linearised at the
 /// robot mean x and landmark mean y; z - zhat is the sensor's residual (bearing wrapped).

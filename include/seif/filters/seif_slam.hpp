@@ -64,6 +64,12 @@ struct SeifOptions {
   /// landmarks; a landmark and its neighbours), O(1): it conditions on everything outside,
   /// so it is smaller than the marginal - an approximation for display, not for gating.
   Covariance covariance = Covariance::Exact;
+  /// Eseif: how many landmarks' observations relocalise the robot (z_beta), best informed
+  /// first, when the step has that many: >= 2 (a 2-D point sensor's least for the 3-dof
+  /// pose); fewer when the step has fewer (but 2), more while the pose is ill-conditioned,
+  /// never more than max_active. More give a better relocalised pose (docs: the paper's
+  /// world's map error is several times smaller with 4 than with 2).
+  int eseif_beta = 2;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
@@ -131,6 +137,15 @@ class SeifSlam final : public SlamFilter {
   /// during the last step (zero up to rounding, by paper eq. 44-51); 0 when none removed.
   double lastSparsificationResidual() const { return last_sparsification_residual_; }
 
+  // Sparsify::Eseif counters, over the filter's life.
+  /// Steps whose robot was marginalised out and relocalised from z_beta.
+  std::size_t eseifRelocalizations() const { return eseif_relocalizations_; }
+  /// Steps that left more than max_active landmarks active: no usable z_beta.
+  std::size_t eseifDeferrals() const { return eseif_deferrals_; }
+  /// SEIF conditioning sparsifications (eq. 44-51) under Eseif: the active set reached
+  /// kMaxLocalLandmarks while deferred, or within one batch.
+  std::size_t eseifFallbacks() const { return eseif_fallbacks_; }
+
  protected:
   Pose2 linearizationPose() const override { return store_.robotMean(); }
 
@@ -139,6 +154,17 @@ class SeifSlam final : public SlamFilter {
   Eigen::MatrixXd localCovariance(int slot) const;
   /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).
   void deactivateSurplus(bool solve_active_mean_first);
+  /// update() with Sparsify::Eseif (Walter, Eustice, Leonard 2007).
+  void eseifUpdate(std::span<const Observation> z, const MeasurementModel& sensor);
+  /// Whether z would leave more than max_active landmarks active.
+  bool exceedsActive(std::span<const Observation> z) const;
+  /// Splits z into z_alpha (alpha_, gross outliers dropped) and z_beta (beta_): the fewest
+  /// observations of mapped landmarks, best informed first, whose stacked pose Jacobian
+  /// is well conditioned. False (z_beta empty, alpha_ all of z) when there is none.
+  bool partitionObservations(std::span<const Observation> z, const MeasurementModel& sensor);
+  /// Marginalises the robot out and relocalises it from z_beta alone; false (nothing
+  /// changed) when the pose does not converge.
+  bool relocalizeRobot(const MeasurementModel& sensor);
   void invalidateFactor();
 
   FilterConfig config_;
@@ -149,11 +175,18 @@ class SeifSlam final : public SlamFilter {
   std::mt19937_64 rng_;
   std::size_t relax_cursor_ = 0;  // next landmark of a cyclic relaxation
   double last_sparsification_residual_ = 0.0;
+  std::size_t eseif_relocalizations_ = 0;
+  std::size_t eseif_deferrals_ = 0;
+  std::size_t eseif_fallbacks_ = 0;
 
   // Work buffers, reused every step (no allocation in the steady state).
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxLocalDim> workspace_;
   std::vector<int> order_;
   std::vector<std::pair<double, int>> ranking_;
+  std::vector<Observation> alpha_;  // ESEIF's z_alpha
+  std::vector<Observation> beta_;   // ESEIF's z_beta
+  std::vector<int> beta_slots_;     // their landmarks
+  std::vector<unsigned char> roles_;  // per observation of a step: alpha, beta or rejected
 
   /// The sparse Cholesky factor of H and its selected inverse, built on first use after H
   /// changed: exact means and marginal covariances.

@@ -82,6 +82,11 @@ class SeifStore {
   void addToLink(int a, int c, const Mat2& H_ac);
   /// Deactivates landmark `slot`: drops its robot link (the last one takes its place).
   void removeRobotLink(int slot);
+  /// ESEIF relocalisation's start (Walter et al. 2007): the robot, already marginalised out
+  /// (its information and links zero, e.g. a scattered marginalizeRobot() block), restarts
+  /// without information at mean mu_x: every robot link is dropped, H_xx = 0, b_x = 0.
+  /// addObservation() then gives it its new information.
+  void detachRobot(const Vec3& mu_x);
   /// Sets the whole mean, in the state order.
   void setMean(const Eigen::VectorXd& mu);
 
