@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <iostream>
 
 namespace {
 
@@ -137,6 +138,31 @@ TEST(ConsistencyCli, WritesTheTableJsonAndCsv) {
   const auto bad = seif::test::runCli("consistency --filters ekf:relax=3 --out " + dir.string());
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.err.find("ekf:relax=3"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+
+namespace {
+
+// The batch MAP is the reference: on the paper world its NEES lies in the chi-square band
+// (seeds 1-10, fixed in advance), while the EKF's is far above it.
+TEST(Consistency, TheBatchMapIsConsistentAndTheEkfIsNot) {
+  seif::ConsistencyOptions o;
+  o.world = seif::presetConfig(seif::WorldPreset::Paper, 0, 0, 1);
+  o.runs = 10;
+  o.samples = 1;
+  o.filters = {seif::parseFilterSpec("batch"), seif::parseFilterSpec("ekf")};
+  const seif::ConsistencyResult r = seif::runConsistency(o);
+  const seif::ConsistencyFilterResult& batch = r.filters[0];
+  const seif::ConsistencyFilterResult& ekf = r.filters[1];
+  std::cout << "landmark NEES batch " << batch.nees_final.landmark << ", ekf " << ekf.nees_final.landmark
+            << "; band [" << r.landmark_band.lo << ", " << r.landmark_band.hi << "]\n";
+  EXPECT_GT(batch.nees_final.landmark, r.landmark_band.lo);
+  EXPECT_LT(batch.nees_final.landmark, r.landmark_band.hi);
+  EXPECT_GT(batch.nees_final.pose, r.pose_band.lo);
+  EXPECT_LT(batch.nees_final.pose, r.pose_band.hi);
+  EXPECT_GT(ekf.nees_final.landmark, 3.0 * r.landmark_band.hi);
+  EXPECT_LT(batch.mse_final, ekf.mse_final);
 }
 
 }  // namespace

@@ -22,7 +22,7 @@ struct ConsistencyArgs {
   int steps = 0;
   int runs = 50;
   std::uint64_t seed = 1;
-  std::vector<std::string> filters = {"batch", "ekf", "ekf:linearization=fej", "seif"};
+  std::string filters = "batch,ekf,seif";
   int samples = 50;
   int jobs = 0;
   std::string out = "out/consistency";
@@ -51,7 +51,7 @@ void consistencyCommand(const ConsistencyArgs& args) {
   options.runs = args.runs;
   options.samples = args.samples;
   options.threads = static_cast<unsigned>(args.jobs);
-  for (const std::string& f : args.filters) options.filters.push_back(parseFilterSpec(f));
+  for (const std::string& f : splitFilterList(args.filters)) options.filters.push_back(parseFilterSpec(f));
   requireOutputFolder(args.out);
   const std::filesystem::path dir(args.out);
 
@@ -106,8 +106,8 @@ void addConsistencyCommand(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "simulator seed of run 0 (run r: seed + r)")
       ->transform(seedValue())
       ->capture_default_str();
-  cmd->add_option("--filters", args->filters, "comma-separated filter specs")
-      ->delimiter(',')
+  cmd->add_option("--filters", args->filters,
+                  "comma-separated filter specs; options continue a spec: ekf,seif:sparsify=eseif,beta=4")
       ->capture_default_str();
   cmd->add_option("--samples", args->samples, "points of the NEES-against-time series")
       ->transform(integerIn(1, INT_MAX))

@@ -145,6 +145,16 @@ void SeifFlags::add(CLI::App& cmd) {
                  "(the paper; slower in huge maps: cache misses)")
       ->check(CLI::IsMember({"random", "cyclic"}))
       ->capture_default_str();
+  cmd.add_option("--sparsify", sparsify,
+                 "SEIF: how the robot's links are kept at theta_x: eseif (marginalise the robot out and\n"
+                 "relocalise it from --beta of the current observations: H exactly sparse, nothing\n"
+                 "conditioned away; honest covariances where >= beta landmarks are seen at once) or seif\n"
+                 "(the paper's conditioning: overconfident, better with few landmarks in view)")
+      ->check(CLI::IsMember({"seif", "eseif"}))
+      ->capture_default_str();
+  cmd.add_option("--beta", beta, "ESEIF: landmarks whose observations relocalise the robot (>= 2)")
+      ->transform(integerIn(2, kMaxLocalLandmarks - 1))
+      ->capture_default_str();
   cmd.add_option("--seed", seed, "SEIF: seed of the random choice of relaxed landmarks")
       ->transform(seedValue())
       ->capture_default_str();
@@ -158,6 +168,8 @@ SeifOptions SeifFlags::resolve() const {
   o.deactivate = SeifOptions::parseDeactivate(deactivate);
   o.recovery = SeifOptions::parseRecovery(recovery);
   o.relax_order = SeifOptions::parseRelaxOrder(relax_order);
+  o.sparsify = SeifOptions::parseSparsify(sparsify);
+  o.eseif_beta = beta;
   o.seed = seed;
   return o;
 }

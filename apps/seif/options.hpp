@@ -55,6 +55,10 @@ struct SeifFlags {
   std::string deactivate = "weakest";
   std::string recovery = "before-update";
   std::string relax_order = "cyclic";
+  /// The paper's conditioning (seif) or the ESEIF's exact sparsification (eseif), which
+  /// relocalises the robot from `beta` landmarks; README "Which SEIF" compares them.
+  std::string sparsify = "seif";
+  int beta = 4;
   std::uint64_t seed = 1;
   void add(CLI::App& cmd);
   SeifOptions resolve() const;

@@ -1,5 +1,6 @@
 #include <seif/eval/paper.hpp>
 #include <seif/eval/stats.hpp>
+#include <seif/eval/consistency.hpp>
 
 #include <seif/core/errors.hpp>
 #include <seif/filters/ekf_slam.hpp>
@@ -41,6 +42,12 @@ std::vector<PaperFilterSpec> paperFilters(const PaperOptions& options) {
     PaperFilterSpec s = amortized;
     s.name = "seif_active_" + std::to_string(active);
     s.seif.max_active = active;
+    specs.push_back(s);
+  }
+  for (const std::string& text : options.extra) {
+    PaperFilterSpec s;
+    s.name = text;
+    s.spec = parseFilterSpec(text);
     specs.push_back(s);
   }
   return specs;
@@ -85,7 +92,11 @@ PaperRun runPaperExperiment(std::uint64_t seed, const PaperOptions& options,
 
   for (const PaperFilterSpec& spec : paperFilters(options)) {
     std::unique_ptr<SlamFilter> filter;
-    if (spec.ekf) {
+    if (spec.spec) {
+      FilterSpec fs = *spec.spec;
+      fs.seif.seed = seed;
+      filter = makeFilter(fs, start, config);
+    } else if (spec.ekf) {
       filter = std::make_unique<EkfSlam>(start, config);
     } else {
       SeifOptions o = spec.seif;
@@ -107,6 +118,9 @@ PaperRun runPaperExperiment(std::uint64_t seed, const PaperOptions& options,
     r.aligned_mse = shape ? *shape * *shape : std::numeric_limits<double>::quiet_NaN();
     r.pose_error = (filter->pose().head<2>() - true_end.head<2>()).norm();
     r.stats = out.final_stats;
+    const NeesPoint nees = measureNees(*filter, true_end, data.landmarks);
+    r.landmark_nees = nees.landmark;
+    r.pose_nees = nees.pose;
     r.step_seconds = out.step_seconds;
     run.filters.push_back(std::move(r));
     if (detail) {
@@ -194,6 +208,8 @@ PaperFilterSummary summarizePaperFilter(std::size_t f, const std::vector<PaperRu
     s.mapped.push_back(static_cast<double>(r.mapped));
     s.robot_links.push_back(static_cast<double>(r.stats.robot_links));
     s.pose_error.push_back(r.pose_error);
+    s.landmark_nees.push_back(r.landmark_nees);
+    s.pose_nees.push_back(r.pose_nees);
     s.diff_to_ekf.push_back(r.mse - run.filters[0].mse);
     for (double t : r.step_seconds) us.push_back(1e6 * t);
   }
@@ -204,6 +220,8 @@ PaperFilterSummary summarizePaperFilter(std::size_t f, const std::vector<PaperRu
   s.map = summarize(s.mapped);
   s.diff = summarize(s.diff_to_ekf);
   s.pose = summarize(s.pose_error);
+  s.nees = summarize(s.landmark_nees);
+  s.nees_pose = summarize(s.pose_nees);
   std::vector<double> ekf_mse, residual, ratios;
   for (const PaperRun& run : runs) ekf_mse.push_back(run.filters[0].mse);
   const double ekf_mean = sampleMean(ekf_mse);

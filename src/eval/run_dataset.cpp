@@ -27,6 +27,9 @@ nlohmann::json seifOptionsObject(const SeifOptions& o) {
           {"deactivate", o.deactivate == SeifOptions::Deactivate::Oldest ? "oldest" : "weakest"},
           {"recovery", o.recovery == SeifOptions::Recovery::BeforeMeasurement ? "before-update" : "after-update"},
           {"relax_order", o.relax_order == SeifOptions::RelaxOrder::Cyclic ? "cyclic" : "random"},
+          {"sparsify", o.sparsify == SeifOptions::Sparsify::Eseif ? "eseif" : "seif"},
+          {"beta", o.eseif_beta},
+          {"covariance", o.covariance == SeifOptions::Covariance::Local ? "local" : "exact"},
           {"seed", o.seed}};
 }
 

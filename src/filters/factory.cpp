@@ -80,6 +80,25 @@ FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, c
   return spec;
 }
 
+std::vector<std::string> splitFilterList(std::string_view list) {
+  std::vector<std::string> specs;
+  while (true) {
+    const std::size_t comma = list.find(',');
+    const std::string_view item = list.substr(0, comma);
+    if (item.empty()) throw std::invalid_argument("filter list '" + std::string(list) + "': an empty item");
+    const bool option = item.find('=') != std::string_view::npos && item.find(':') == std::string_view::npos;
+    if (option) {
+      if (specs.empty()) throw std::invalid_argument("filter list: option '" + std::string(item) + "' before any filter");
+      specs.back().append(",").append(item);
+    } else {
+      specs.emplace_back(item);
+    }
+    if (comma == std::string_view::npos) break;
+    list = list.substr(comma + 1);
+  }
+  return specs;
+}
+
 std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& start, const FilterConfig& config) {
   FilterConfig c = config;
   c.linearization = spec.linearization;

@@ -7,6 +7,7 @@
 // parallel and summarises them (eval/stats.hpp).
 #include <seif/eval/run.hpp>
 #include <seif/eval/stats.hpp>
+#include <seif/filters/factory.hpp>
 #include <seif/filters/seif_slam.hpp>
 #include <seif/filters/slam_filter.hpp>
 #include <seif/core/dataset.hpp>
@@ -17,6 +18,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +34,10 @@ struct PaperOptions {
   /// Extra constant-time SEIFs, one per theta_x listed (the journal version's study),
   /// named "seif_active_<theta_x>" and run on the same data.
   std::vector<int> sweep_active;
+  /// Filters beyond the paper, by spec (filters/factory.hpp: "batch",
+  /// "ekf:linearization=fej", "seif:sparsify=eseif,beta=4", ...), run after the sweep on the
+  /// same data and named by their spec.
+  std::vector<std::string> extra;
 };
 
 /// One filter of the experiment.
@@ -39,6 +45,7 @@ struct PaperFilterSpec {
   std::string name;  ///< "ekf", "seif_exact", "seif" or "seif_active_<theta_x>"
   bool ekf = false;  ///< EkfSlam; otherwise SeifSlam with `seif`
   SeifOptions seif;  ///< the SEIF's options (its seed is set per run)
+  std::optional<FilterSpec> spec;  ///< a filter beyond the paper (PaperOptions::extra): built from it
 };
 
 /// The filters in the order runPaperExperiment() runs and reports them: "ekf",
@@ -68,6 +75,10 @@ struct PaperFilterResult {
   std::size_t mapped = 0;   ///< landmarks in the filter's map at the end
   FilterStats stats;        ///< after the last step (links = non-zero off-diagonal H blocks)
   std::vector<double> step_seconds;  ///< wall time of every predict + update [s]
+  /// NEES after the last step with the filter's own covariances (eval/consistency.hpp):
+  /// landmark (mean over the map, 2 dof expected) and pose (3 dof).
+  double landmark_nees = 0.0;
+  double pose_nees = 0.0;
 };
 
 /// One run: the data, and every filter's result on it.
@@ -82,9 +93,9 @@ struct PaperRun {
 struct PaperFilterSummary {
   std::string name;
   std::vector<std::uint64_t> seeds;
-  std::vector<double> mse, rmse, aligned_mse, links, mapped, robot_links, pose_error;
+  std::vector<double> mse, rmse, aligned_mse, links, mapped, robot_links, pose_error, landmark_nees, pose_nees;
   std::vector<double> diff_to_ekf;  // per-run mse - ekf mse [m^2]
-  Summary error, rms, aligned_error, link, map, diff, pose;
+  Summary error, rms, aligned_error, link, map, diff, pose, nees, nees_pose;
   double us_median = 0.0;
   double us_mean = 0.0;
   // Error relative to the EKF on the same runs: the ratio of the means, its 95% CI by the

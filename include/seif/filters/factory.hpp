@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace seif {
 
@@ -25,6 +26,11 @@ struct FilterSpec {
 /// the spec and what is wrong (unknown name, key or value; a key the filter does not take).
 FilterSpec parseFilterSpec(std::string_view text, Linearization linearization = Linearization::Standard,
                            const SeifOptions& seif = {});
+
+/// Splits a comma-separated list of specs, "batch,ekf,seif:sparsify=eseif,beta=4": an item
+/// with '=' but no ':' continues the previous spec's options. Throws std::invalid_argument
+/// for an empty item or options before any filter name.
+std::vector<std::string> splitFilterList(std::string_view list);
 
 /// Throws std::invalid_argument for an unknown name, listing the valid ones.
 std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& start, const FilterConfig& config);
