@@ -77,7 +77,7 @@ void EkfSlam::addLandmark(const Observation& z, const MeasurementModel& sensor) 
 void EkfSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
   // A landmark's first observation initialises it (and carries no other information);
   // all other observations form one joint update linearised at the prior mean (with FEJ:
-  // each landmark's Jacobians at its first estimate, Huang et al. 2010 eq. 32).
+  // each landmark's Jacobians at its first estimate, Huang et al. 2010, the FEJ-EKF).
   // Gross outliers (OutlierGate) are dropped first.
   std::vector<const Observation*> updates;
   updates.reserve(observations.size());

@@ -153,7 +153,7 @@ void SeifSlam::relaxMean(int sweeps) {
 void SeifSlam::measurementUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
   invalidateFactor();
   // §3, paper eq. (21-22): every observation linearised at the current mean (with FEJ:
-  // each landmark's Jacobians at its first estimate, Huang et al. 2010 eq. 32).
+  // each landmark's Jacobians at its first estimate, Huang et al. 2010, the FEJ-EKF).
   for (const Observation& z : observations) {
     requireAssociated(z, "seif");
     const Mat2 Z_inv = sensor.noise(z).inverse();

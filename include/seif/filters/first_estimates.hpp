@@ -16,8 +16,8 @@ class FirstEstimates {
   /// p_{0|-1} = the start position (there is no earlier prediction).
   explicit FirstEstimates(const Pose2& start) : predicted_(start.head<2>()) {}
 
-  /// The motion increment with the FEJ Jacobian (Huang et al. eq. 31): its heading column
-  /// (dDelta/dth = S delta_xy, S = [0 -1; 1 0], for every planar model) becomes
+  /// The motion increment with the FEJ-EKF's state Jacobian (Huang et al. 2010): its
+  /// heading column (dDelta/dth = S delta_xy, S = [0 -1; 1 0], for every planar model) becomes
   /// S (p_{k+1|k} - p_{k|k-1}), with p_{k+1|k} = `position` + delta_xy and `position` the
   /// filter's position p_{k|k} the increment was linearised at. delta and U are unchanged.
   /// Records p_{k+1|k} as the next step's p_{k|k-1}.
@@ -30,7 +30,7 @@ class FirstEstimates {
   /// Records a new landmark's first estimate (its mean when initialised), in slot order.
   void addLandmark(const Vec2& first) { landmarks_.push_back(first); }
   /// The first estimate of the landmark in `slot`, where its measurement Jacobians are
-  /// evaluated (Huang et al. eq. 32).
+  /// evaluated (the FEJ-EKF's measurement Jacobian).
   const Vec2& landmark(int slot) const { return landmarks_[static_cast<std::size_t>(slot)]; }
   int size() const { return static_cast<int>(landmarks_.size()); }
 

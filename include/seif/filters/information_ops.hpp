@@ -55,7 +55,7 @@ void marginalizeRobot(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd>
 /// Information added by one observation, paper eq. (21-22), ordered [robot (3),
 /// landmark (2)]:  dH = J^T Z^-1 J,  db = J^T Z^-1 (z - zhat + J mu), linearised at the
 /// robot mean x and landmark mean y; z - zhat is the sensor's residual (bearing wrapped).
-/// With `jacobian_landmark` (first-estimates Jacobians, Huang et al. 2010 eq. 32) J is
+/// With `jacobian_landmark` (first-estimates Jacobians, Huang et al. 2010, the FEJ-EKF) J is
 /// evaluated at (x, jacobian_landmark) instead, while zhat = h(x, y) and the mean in
 /// J mu stay the current ones: db = J^T Z^-1 (z - h(x, y) + J [x; y]).
 struct MeasurementInformation {

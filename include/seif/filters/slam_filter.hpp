@@ -23,7 +23,7 @@ enum class Linearization {
   /// At the newest estimates (the textbook EKF): gains spurious information about the
   /// global heading, which is unobservable (Huang, Mourikis, Roumeliotis, IJRR 2010).
   Standard,
-  /// First-estimates Jacobians (Huang et al. 2010, eq. 28-32): the motion Jacobian's
+  /// First-estimates Jacobians (Huang et al. 2010, the FEJ-EKF): the motion Jacobian's
   /// heading column from the pose predictions, every landmark's Jacobian at its first
   /// estimate, so the linearised system keeps the unobservable directions of the real one.
   FirstEstimates,
