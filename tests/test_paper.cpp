@@ -289,4 +289,20 @@ TEST(PaperCli, SweepAddsItsSection) {
   fs::remove_all(dir);
 }
 
+TEST(PaperCli, FiltersBeyondThePaperGetTheirTableWithNees) {
+  const fs::path dir = scratch("beyond");
+  ASSERT_EQ(runCli("paper --runs 2 --filters ekf:linearization=fej,seif:sparsify=eseif,beta=4 --no-figures --out " +
+                       dir.string(),
+                   dir / "log"),
+            0)
+      << slurp(dir / "log");
+  const auto r = nlohmann::json::parse(slurp(dir / "results.json"));
+  ASSERT_EQ(r["filters"].size(), 5u);  // the paper's three, then the two given
+  EXPECT_EQ(r["filters"][4]["spec"], "seif:sparsify=eseif,beta=4");
+  for (const auto& f : r["filters"]) EXPECT_GT(f["landmark_nees_mean"].get<double>(), 0.0) << f["name"];
+  EXPECT_NE(slurp(dir / "table.md").find("| seif:sparsify=eseif,beta=4 |"), std::string::npos);
+  EXPECT_NE(runCli("paper --runs 2 --filters seif:beta --out " + (dir / "bad").string(), dir / "log"), 0);
+  fs::remove_all(dir);
+}
+
 }  // namespace
