@@ -8,7 +8,8 @@
 // a singular process noise (the velocity model's U has rank 2) is treated exactly, its
 // noise-free directions as hard constraints and U^+ (the pseudo-inverse) as the weight.
 // Each iteration solves the sparse KKT system [[A, C^T], [C, 0]] (A = J^T Omega J) with
-// SparseLU; U_k and dDelta/dx are evaluated at the current x_k (held fixed within a step).
+// SparseLU; U_k, its derivative in x_k (central differences: the model gives U only) and
+// dDelta/dx are evaluated at the current x_k.
 //
 // While streaming, an inner EKF (same config) gives the estimates and, per step, the
 // Gauss-Newton start. After finish() the estimates refer, like the filters', to the state
