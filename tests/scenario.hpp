@@ -3,6 +3,7 @@
 // circular path, range-bearing observations with noise, all from one seed.
 #include <seif/core/angles.hpp>
 #include <seif/core/dataset.hpp>
+#include <seif/filters/slam_filter.hpp>
 #include <seif/models/range_bearing.hpp>
 #include <seif/models/velocity_motion.hpp>
 
@@ -19,6 +20,13 @@ struct Scenario {
 };
 
 /// `noise_scale` multiplies every noise sigma (smaller: a more nearly linear problem).
+/// A filter config with the scenario's noise (the paper's default models).
+inline FilterConfig configFor(const Scenario& s) {
+  FilterConfig c;
+  c.noise = s.noise;
+  return c;
+}
+
 inline Scenario makeScenario(std::uint64_t seed, int landmarks, int steps,
                              double sensor_range = 3.0, double noise_scale = 1.0) {
   Scenario s;

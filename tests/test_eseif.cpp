@@ -19,11 +19,7 @@ namespace {
 
 using namespace seif;
 
-FilterConfig configFor(const test::Scenario& s) {
-  FilterConfig c;
-  c.noise = s.noise;
-  return c;
-}
+using test::configFor;
 
 SeifOptions eseifOptions(SeifOptions::Mean mean, int max_active) {
   SeifOptions o;

@@ -24,11 +24,7 @@ void expectSymmetricPositiveDefinite(const Eigen::MatrixXd& M, const std::string
   EXPECT_EQ(llt.info(), Eigen::Success) << what << " is not positive definite";
 }
 
-FilterConfig configFor(const test::Scenario& s) {
-  FilterConfig c;
-  c.noise = s.noise;
-  return c;
-}
+using test::configFor;
 
 }  // namespace
 

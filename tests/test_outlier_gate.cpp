@@ -18,11 +18,7 @@ namespace {
 
 using namespace seif;
 
-FilterConfig configFor(const test::Scenario& s) {
-  FilterConfig c;
-  c.noise = s.noise;
-  return c;
-}
+using test::configFor;
 
 Dataset datasetOf(const test::Scenario& s) {
   Dataset d;

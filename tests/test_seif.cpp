@@ -21,11 +21,7 @@ double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   return (a - b).norm() / std::max(1e-300, b.norm());
 }
 
-FilterConfig configFor(const test::Scenario& s) {
-  FilterConfig c;
-  c.noise = s.noise;
-  return c;
-}
+using test::configFor;
 
 double landmarkRmse(const SlamFilter& f, const test::Scenario& s) {
   double sum = 0;

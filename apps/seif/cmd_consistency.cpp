@@ -108,6 +108,7 @@ void addConsistencyCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--filters", args->filters,
                   "comma-separated filter specs; options continue a spec: ekf,seif:sparsify=eseif,beta=4")
+      ->check(filterSpecs())
       ->capture_default_str();
   cmd->add_option("--samples", args->samples, "points of the NEES-against-time series")
       ->transform(integerIn(1, INT_MAX))

@@ -664,14 +664,7 @@ void addPaperCommand(CLI::App& app) {
                   "also run these filters beyond the paper's (specs, e.g. batch,ekf:linearization=fej,\n"
                   "seif:sparsify=eseif,beta=4) and add a table of every filter's error against the EKF\n"
                   "and the batch MAP, with its NEES")
-      ->check([](const std::string& s) -> std::string {
-        try {
-          for (const std::string& f : splitFilterList(s)) parseFilterSpec(f);
-        } catch (const std::invalid_argument& e) {
-          return e.what();
-        }
-        return {};
-      });
+      ->check(filterSpecs());
   cmd->add_option("--sweep-active", args->sweep_active,
                   "also run the constant-time SEIF with each theta_x listed, e.g. 4,6,10,20")
       ->delimiter(',')

@@ -113,14 +113,7 @@ void addRunCommand(CLI::App& app) {
                   "seif:sparsify=eseif,linearization=fej (keys: linearization=standard|fej; for the\n"
                   "seif sparsify=seif|eseif, active, relax, mean, deactivate, recovery, relax-order,\n"
                   "covariance=exact|local, seed); options given here override the --active... flags")
-      ->check([](const std::string& s) -> std::string {
-        try {
-          parseFilterSpec(s);
-        } catch (const std::invalid_argument& e) {
-          return e.what();
-        }
-        return {};
-      })
+      ->check(filterSpecs())
       ->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->capture_default_str();
   cmd->add_option("--outlier-gate", args->outlier_gate,

@@ -117,6 +117,19 @@ DatasetOptions NoiseFlags::resolve() const {
   return o;
 }
 
+CLI::Validator filterSpecs() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        try {
+          for (const std::string& f : splitFilterList(s)) parseFilterSpec(f);
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+        return {};
+      },
+      "SPEC[,SPEC...]");
+}
+
 void SeifFlags::add(CLI::App& cmd) {
   cmd.add_option("--active", active,
                  "SEIF: theta_x, landmarks kept linked to the robot (the paper: 6)")

@@ -29,6 +29,9 @@ CLI::Validator positiveFinite();
 /// conversion in canonical form (so 010 is ten). Add it with Option::transform(): check()
 /// would drop the canonical form.
 CLI::Validator integerIn(long long lo, long long hi);
+/// A comma-separated list of filter specs (splitFilterList, parseFilterSpec), checked before
+/// any work; the message names the bad spec. A single spec passes it too.
+CLI::Validator filterSpecs();
 /// A seed: a decimal integer in [0, 2^64 - 1]; like integerIn, for Option::transform().
 CLI::Validator seedValue();
 
