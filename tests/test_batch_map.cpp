@@ -224,7 +224,7 @@ TEST(BatchMap, NeedsTheMotionInputAndTheConfigSensor) {
   const RangeBearingModel other(0.1, 0.1);
   const std::vector<Observation> obs{{1, Vec2(1.0, 0.2), std::nullopt}};
   EXPECT_THROW(batch.update(obs, other), ModelError);
-  EXPECT_THROW(batch.trajectoryCovariances(), std::logic_error);
+  EXPECT_THROW(batch.trajectoryCovariances(), seif::InvalidArgument);
   EXPECT_TRUE(batch.smoothedTrajectory().empty());
 }
 

@@ -342,10 +342,10 @@ TEST(Cli, NoiseValuesResolveRequiresFinitePositiveSigmas) {
   try {
     seif::resolveNoise(info, {}, "sigma_v", "m/s", 0.0, "meta.json", 0.05);
     ADD_FAILURE() << "a zero sigma was accepted";
-  } catch (const std::invalid_argument& e) {
+  } catch (const seif::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("sigma_v must be finite and > 0, found 0 (meta.json)"), std::string::npos)
         << e.what();
   }
   options.noise["sigma_nope"] = 1.0;
-  EXPECT_THROW(seif::checkNoiseNames(options, {"sigma_v"}, "mrclam"), std::invalid_argument);
+  EXPECT_THROW(seif::checkNoiseNames(options, {"sigma_v"}, "mrclam"), seif::InvalidArgument);
 }

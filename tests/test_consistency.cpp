@@ -4,6 +4,7 @@
 // end to end.
 #include "cli_support.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/eval/consistency.hpp>
 #include <seif/eval/stats.hpp>
 #include <seif/filters/ekf_slam.hpp>
@@ -25,7 +26,7 @@ TEST(ChiSquare, QuantilesMatchTables) {
   EXPECT_NEAR(seif::chiSquareQuantile(0.975, 100), 129.5612, 1e-3);
   EXPECT_NEAR(seif::chiSquareQuantile(0.025, 100), 74.2219, 1e-3);
   EXPECT_NEAR(seif::chiSquareCdf(seif::chiSquareQuantile(0.3, 7.5), 7.5), 0.3, 1e-12);
-  EXPECT_THROW(seif::chiSquareQuantile(1.0, 3), std::invalid_argument);
+  EXPECT_THROW(seif::chiSquareQuantile(1.0, 3), seif::InvalidArgument);
 }
 
 TEST(ChiSquare, NeesBandIsTheBandOfTheMeanOfRunsValues) {
@@ -112,14 +113,14 @@ TEST(Consistency, ResultsDoNotDependOnTheThreadCount) {
 TEST(Consistency, BadOptionsAreRejected) {
   seif::ConsistencyOptions o = smallStudy(1);
   o.runs = 0;
-  EXPECT_THROW(seif::runConsistency(o), std::invalid_argument);
+  EXPECT_THROW(seif::runConsistency(o), seif::InvalidArgument);
   o = smallStudy(1);
   o.filters.clear();
-  EXPECT_THROW(seif::runConsistency(o), std::invalid_argument);
-  EXPECT_THROW(seif::parseFilterSpec("seif:sparsify=magic"), std::invalid_argument);
-  EXPECT_THROW(seif::parseFilterSpec("ekf:active=3"), std::invalid_argument);
-  EXPECT_THROW(seif::parseFilterSpec("seif:active"), std::invalid_argument);
-  EXPECT_THROW(seif::parseFilterSpec("ukf"), std::invalid_argument);
+  EXPECT_THROW(seif::runConsistency(o), seif::InvalidArgument);
+  EXPECT_THROW(seif::parseFilterSpec("seif:sparsify=magic"), seif::InvalidArgument);
+  EXPECT_THROW(seif::parseFilterSpec("ekf:active=3"), seif::InvalidArgument);
+  EXPECT_THROW(seif::parseFilterSpec("seif:active"), seif::InvalidArgument);
+  EXPECT_THROW(seif::parseFilterSpec("ukf"), seif::InvalidArgument);
   const seif::FilterSpec s = seif::parseFilterSpec("seif:sparsify=eseif,linearization=fej,active=4");
   EXPECT_EQ(s.seif.sparsify, seif::SeifOptions::Sparsify::Eseif);
   EXPECT_EQ(s.linearization, seif::Linearization::FirstEstimates);

@@ -4,6 +4,7 @@
 // as uncertain as in the full EIF on the same data.
 #include "scenario.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/filters/eif_slam.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/filters/information_ops.hpp>
@@ -76,7 +77,7 @@ TEST(Eseif, StaysExactlySparseAndConsistentAfterEveryStep) {
         ASSERT_EQ(seif.store().node(l.slot).active >= 0, true);
       }
       for (std::size_t i = 0; i < linked.size(); ++i) {
-        const double block = dense.block(0, LandmarkIndex::stateIndex(static_cast<int>(i)), 3, 2).cwiseAbs().maxCoeff();
+        const double block = dense.block(0, StateLayout::landmark(static_cast<int>(i)), 3, 2).cwiseAbs().maxCoeff();
         ASSERT_EQ(block > 0.0, linked[i]) << "landmark slot " << i;
       }
       ASSERT_EQ(seif.lastSparsificationResidual(), 0.0);  // nothing conditioned away
@@ -186,10 +187,10 @@ TEST(Eseif, SpecSelectsItAndBetaIsValidated) {
   const FilterSpec spec = parseFilterSpec("seif:sparsify=eseif,beta=3,active=5");
   EXPECT_EQ(spec.seif.sparsify, SeifOptions::Sparsify::Eseif);
   EXPECT_EQ(spec.seif.eseif_beta, 3);
-  EXPECT_THROW(parseFilterSpec("ekf:beta=3"), std::invalid_argument);
+  EXPECT_THROW(parseFilterSpec("ekf:beta=3"), seif::InvalidArgument);
   SeifOptions o = eseifOptions(SeifOptions::Mean::Amortized, 4);
   o.eseif_beta = 1;
-  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), std::invalid_argument);
+  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), seif::InvalidArgument);
 }
 
 TEST(Eseif, WithoutAUsableZBetaItDefersThenFallsBackAndCounts) {

@@ -2,6 +2,7 @@
 // bearing wrapping, information <-> moments round trips.
 #include "scenario.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/filters/eif_slam.hpp>
 #include <seif/filters/ekf_slam.hpp>
 
@@ -138,6 +139,6 @@ TEST(DenseFilters, StatsCountTheFullGraphOfTheDenseFilters) {
 TEST(DenseFilters, UnknownLandmarkQueriesThrow) {
   EkfSlam ekf(Pose2::Zero(), FilterConfig{});
   EifSlam eif(Pose2::Zero(), FilterConfig{});
-  EXPECT_THROW(ekf.landmark(3), std::out_of_range);
-  EXPECT_THROW(eif.landmarkCovariance(3), std::out_of_range);
+  EXPECT_THROW(ekf.landmark(3), seif::UnknownLandmark);
+  EXPECT_THROW(eif.landmarkCovariance(3), seif::UnknownLandmark);
 }

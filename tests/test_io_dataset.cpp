@@ -230,7 +230,7 @@ TEST(DatasetInterpolatePose, LinearInsideClampedOutside) {
   EXPECT_EQ(interpolatePose(track, 1.0), Pose2(0, 0, 0));
   EXPECT_EQ(interpolatePose(track, 100.0), Pose2(3, -4, 1));
   EXPECT_EQ(interpolatePose({{5.0, Pose2(1, 2, 3)}}, 0.0), Pose2(1, 2, 3));
-  EXPECT_THROW(interpolatePose({}, 0.0), std::invalid_argument);
+  EXPECT_THROW(interpolatePose({}, 0.0), seif::InvalidArgument);
 }
 
 TEST(DatasetInterpolatePose, HeadingTakesTheShortArcAcrossPi) {

@@ -76,7 +76,7 @@ TEST(VictoriaPark, NoiseDefaultsAndOverridesSayWhereTheyCameFrom) {
   EXPECT_EQ(n["sigma_speed"].source, "default for victoria-park");
   EXPECT_EQ(n["sigma_speed"].unit, "m/s*sqrt(s)");
   o.noise["sigma_v"] = 0.1;  // a velocity-model name: not this format's
-  EXPECT_THROW(openVictoriaPark(f, o), std::invalid_argument);
+  EXPECT_THROW(openVictoriaPark(f, o), seif::InvalidArgument);
 }
 
 void expectDataError(const std::string& file, const std::string& content, const std::string& where,

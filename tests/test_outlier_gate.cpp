@@ -2,6 +2,7 @@
 // and a rejected reading leaves the filter exactly as if it had never been made.
 #include "scenario.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/filters/outlier_gate.hpp>
@@ -38,8 +39,8 @@ TEST(OutlierGate, ThresholdIsInMeasurementStandardDeviations) {
   EXPECT_EQ(gate.rejected(), 2u);
   OutlierGate off(std::numeric_limits<double>::infinity());
   EXPECT_FALSE(off.rejects(sensor, x, y, {7, Vec2(1e6, 0.0), {}}, Z_inv));
-  EXPECT_THROW(OutlierGate(0.0), std::invalid_argument);
-  EXPECT_THROW(OutlierGate(std::nan("")), std::invalid_argument);
+  EXPECT_THROW(OutlierGate(0.0), seif::InvalidArgument);
+  EXPECT_THROW(OutlierGate(std::nan("")), seif::InvalidArgument);
 }
 
 // One 1e6 m range among clean readings: rejected and counted, and every filter ends exactly

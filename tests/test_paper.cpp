@@ -1,6 +1,7 @@
 // Tests of the paper's experiment: the statistics (eval/stats.hpp) against values computed
 // by hand and published t tables, one run of the experiment (eval/paper.hpp), and
 // `seif paper` end to end through the executable.
+#include <seif/core/errors.hpp>
 #include <seif/eval/paper.hpp>
 #include <seif/eval/stats.hpp>
 
@@ -65,8 +66,8 @@ TEST(Stats, StudentTQuantilesMatchTables) {
   EXPECT_NEAR(seif::studentTQuantile(0.995, 20), 2.845340, 1e-5);
   EXPECT_NEAR(seif::studentTQuantile(0.025, 7), -2.364624, 1e-5);
   EXPECT_EQ(seif::studentTQuantile(0.5, 4), 0.0);
-  EXPECT_THROW(seif::studentTQuantile(1.0, 4), std::invalid_argument);
-  EXPECT_THROW(seif::studentTQuantile(0.9, 0), std::invalid_argument);
+  EXPECT_THROW(seif::studentTQuantile(1.0, 4), seif::InvalidArgument);
+  EXPECT_THROW(seif::studentTQuantile(0.9, 0), seif::InvalidArgument);
 }
 
 TEST(Stats, QuantileInvertsCdf) {

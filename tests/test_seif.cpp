@@ -2,6 +2,7 @@
 // after every step, and convergence of the amortised mean.
 #include "scenario.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/filters/eif_slam.hpp>
 #include <seif/filters/ekf_slam.hpp>
 #include <seif/filters/information_ops.hpp>
@@ -180,14 +181,14 @@ TEST(Seif, AccuracyIsCloseToTheEkf) {
 TEST(Seif, OptionsAreValidated) {
   SeifOptions o;
   o.max_active = 0;
-  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), std::invalid_argument);
+  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), seif::InvalidArgument);
   o.max_active = 6;
   o.relax = -1;
-  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), std::invalid_argument);
+  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), seif::InvalidArgument);
   EXPECT_EQ(SeifOptions::parseMean("exact"), SeifOptions::Mean::Exact);
-  EXPECT_THROW(SeifOptions::parseDeactivate("random"), std::invalid_argument);
+  EXPECT_THROW(SeifOptions::parseDeactivate("random"), seif::InvalidArgument);
   EXPECT_EQ(SeifOptions::parseRecovery("after-update"), SeifOptions::Recovery::AfterMeasurement);
-  EXPECT_THROW(SeifOptions::parseRecovery("sometimes"), std::invalid_argument);
+  EXPECT_THROW(SeifOptions::parseRecovery("sometimes"), seif::InvalidArgument);
 }
 
 TEST(InformationMotionUpdate, IsTheLinearisedPredictionForAnyLinearisationPoint) {

@@ -2,6 +2,7 @@
 // bounded by a constant that is the same at 10^2 and 10^5 landmarks. Both maps come from the
 // corridor world (about one new landmark per step, the paper's density and sensor), driven
 // to the end, so the 10^5 run ends with ~97,700 landmarks mapped.
+#include <seif/core/errors.hpp>
 #include <seif/eval/bench.hpp>
 #include <seif/eval/run.hpp>
 #include <seif/filters/seif_slam.hpp>
@@ -144,7 +145,7 @@ TEST(SeifScaling, BenchCaseTimesTheEndOfTheCorridor) {
   c.landmarks = 60;  // a corridor shorter than twice the window: half of it is timed
   EXPECT_EQ(runBenchCase(c).steps, 30u);
   c.filter = "nope";
-  EXPECT_THROW(runBenchCase(c), std::invalid_argument);
+  EXPECT_THROW(runBenchCase(c), seif::InvalidArgument);
 }
 
 TEST(SeifScaling, BenchCostModel) {
@@ -175,5 +176,5 @@ TEST(SeifScaling, BenchCostModel) {
   EXPECT_DOUBLE_EQ(s.seconds_per_step, 10e-6);
   EXPECT_NEAR(s.build_seconds, 10.0, 1e-9);
   EXPECT_NEAR(s.bytes, 1e6 * (1100.0 + 700.0), 1.0);
-  EXPECT_THROW(estimateBenchCase("seif", 10, 10.0, {}), std::invalid_argument);
+  EXPECT_THROW(estimateBenchCase("seif", 10, 10.0, {}), seif::InvalidArgument);
 }

@@ -1,5 +1,6 @@
 // The SEIF's block-sparse store on its own: links symmetric and counted once, H and b as
 // added, gather/scatter exact, robot links consistent after removal, relaxation converging.
+#include <seif/core/errors.hpp>
 #include <seif/filters/seif_store.hpp>
 
 #include <Eigen/Cholesky>
@@ -52,7 +53,7 @@ struct Fixture {
       EXPECT_EQ(store.addLandmark(10 + s, Vec2(s, -s)), s);
       const auto [dH, db] = randomInformation(rng);
       store.addObservation(s, dH, db);
-      const int i = LandmarkIndex::stateIndex(s);
+      const int i = StateLayout::landmark(s);
       b.head<3>() += db.head<3>();
       b.segment<2>(i) += db.tail<2>();
       H.topLeftCorner<3, 3>() += dH.topLeftCorner<3, 3>();
@@ -64,8 +65,8 @@ struct Fixture {
       if (c >= n) continue;
       const Mat2 B = randomBlock(rng);
       store.addToLink(a, c, B);
-      H.block<2, 2>(LandmarkIndex::stateIndex(a), LandmarkIndex::stateIndex(c)) += B;
-      H.block<2, 2>(LandmarkIndex::stateIndex(c), LandmarkIndex::stateIndex(a)) += B.transpose();
+      H.block<2, 2>(StateLayout::landmark(a), StateLayout::landmark(c)) += B;
+      H.block<2, 2>(StateLayout::landmark(c), StateLayout::landmark(a)) += B.transpose();
     }
   }
 };
@@ -76,10 +77,10 @@ TEST(SeifStore, SparseInformationIsWhatWasAdded) {
   Fixture f(5);
   EXPECT_EQ(Eigen::MatrixXd(f.store.sparseInformation()), f.H);
   EXPECT_EQ(f.store.informationVector(), f.b);
-  EXPECT_EQ(f.store.index().ids(), (std::vector<int>{10, 11, 12, 13, 14}));
+  EXPECT_EQ(f.store.ids(), (std::vector<int>{10, 11, 12, 13, 14}));
   const Eigen::VectorXd mu = f.store.mean();
   EXPECT_EQ(mu.head<3>(), kRobotMean);
-  EXPECT_EQ(mu.segment<2>(LandmarkIndex::stateIndex(3)), Vec2(3, -3));
+  EXPECT_EQ(mu.segment<2>(StateLayout::landmark(3)), Vec2(3, -3));
   const FilterStats s = f.store.stats();
   EXPECT_EQ(s.landmarks, 5u);
   EXPECT_EQ(s.robot_links, 5u);
@@ -122,8 +123,8 @@ TEST(SeifStore, GatherScatterRoundTripIsExact) {
   // The local block is the dense submatrix of H over [x, 3, 0, 4, 1].
   std::vector<int> rows{0, 1, 2};
   for (int s : order) {
-    rows.push_back(LandmarkIndex::stateIndex(s));
-    rows.push_back(LandmarkIndex::stateIndex(s) + 1);
+    rows.push_back(StateLayout::landmark(s));
+    rows.push_back(StateLayout::landmark(s) + 1);
   }
   for (std::size_t i = 0; i < rows.size(); ++i) {
     EXPECT_EQ(f.store.localB()(static_cast<Eigen::Index>(i)), b_before(rows[i]));
@@ -169,8 +170,8 @@ TEST(SeifStore, RemoveRobotLinkKeepsPositionsConsistent) {
     Eigen::MatrixXd expected = H_before;
     for (int s : {1, 4, 0}) {
       if (f.store.node(s).active >= 0) continue;
-      expected.block<3, 2>(0, LandmarkIndex::stateIndex(s)).setZero();
-      expected.block<2, 3>(LandmarkIndex::stateIndex(s), 0).setZero();
+      expected.block<3, 2>(0, StateLayout::landmark(s)).setZero();
+      expected.block<2, 3>(StateLayout::landmark(s), 0).setZero();
     }
     EXPECT_EQ(Eigen::MatrixXd(f.store.sparseInformation()), expected);
   }
@@ -216,19 +217,19 @@ TEST(SeifStore, JointSolveOfTheActiveBlock) {
   f.store.setMean(Eigen::VectorXd::Zero(b.size()));
   f.store.relaxActive();
   const Eigen::VectorXd mu = f.store.mean();
-  EXPECT_EQ(mu.segment<2>(LandmarkIndex::stateIndex(2)), Vec2::Zero());
+  EXPECT_EQ(mu.segment<2>(StateLayout::landmark(2)), Vec2::Zero());
   const Eigen::MatrixXd H2(f.store.sparseInformation());
   const Eigen::VectorXd r = H2 * mu - b;  // zero except in landmark 2's rows
-  EXPECT_LT(r.head(LandmarkIndex::stateIndex(2)).norm(), 1e-12 * b.norm());
-  EXPECT_LT(r.tail(r.size() - LandmarkIndex::stateIndex(3)).norm(), 1e-12 * b.norm());
-  EXPECT_GT(r.segment<2>(LandmarkIndex::stateIndex(2)).norm(), 1e-3);
+  EXPECT_LT(r.head(StateLayout::landmark(2)).norm(), 1e-12 * b.norm());
+  EXPECT_LT(r.tail(r.size() - StateLayout::landmark(3)).norm(), 1e-12 * b.norm());
+  EXPECT_GT(r.segment<2>(StateLayout::landmark(2)).norm(), 1e-3);
 }
 
 TEST(SeifStore, RejectsABlockLargerThanTheLocalBuffers) {
   SeifStore store(kRobotH, kRobotMean);
   std::vector<int> slots;
   for (int s = 0; s <= kMaxLocalLandmarks; ++s) slots.push_back(store.addLandmark(s, Vec2::Zero()));
-  EXPECT_THROW(store.gather(slots), std::invalid_argument);
+  EXPECT_THROW(store.gather(slots), seif::InvalidArgument);
   slots.pop_back();
   store.gather(slots);
   EXPECT_EQ(store.localH().rows(), kMaxLocalDim);

@@ -1,6 +1,7 @@
 // Tests of the simulator (include/seif/sim/world.hpp, docs/simulator.md), through its
 // public API only. Statistical checks use 99.9 % bounds derived from the sample size, on
 // fixed seeds: they pass or fail deterministically, and fail if the noise is wrong.
+#include <seif/core/errors.hpp>
 #include <seif/core/angles.hpp>
 #include <seif/models/range_bearing.hpp>
 #include <seif/sim/world.hpp>
@@ -98,7 +99,7 @@ TEST(SimWorldPreset, ParsesTheThreeNamesAndRejectsOthersListingThem) {
     try {
       seif::parseWorldPreset(bad);
       ADD_FAILURE() << "accepted \"" << bad << "\"";
-    } catch (const std::invalid_argument& e) {
+    } catch (const seif::InvalidArgument& e) {
       const std::string msg = e.what();
       EXPECT_NE(msg.find("paper"), std::string::npos) << msg;
       EXPECT_NE(msg.find("uniform"), std::string::npos) << msg;
@@ -163,7 +164,7 @@ TEST(SimConfig, InvalidConfigsThrowNamingTheField) {
       try {
         simulate(c);
         ADD_FAILURE() << k.field << " = " << v << " was accepted";
-      } catch (const std::invalid_argument& e) {
+      } catch (const seif::InvalidArgument& e) {
         EXPECT_NE(std::string(e.what()).find(k.field), std::string::npos) << e.what();
       }
     }
@@ -307,7 +308,7 @@ TEST(SimPaperWorld, PathsParseAndNameEachOther) {
   try {
     parsePaperPath("spiral");
     FAIL() << "no exception";
-  } catch (const std::invalid_argument& e) {
+  } catch (const seif::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("lawnmower, lissajous"), std::string::npos) << e.what();
   }
 }

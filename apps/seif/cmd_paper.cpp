@@ -195,7 +195,7 @@ nlohmann::json figureData(const SlamFilter& filter, const RunOutput& out, const 
 void paperCommand(const PaperArgs& args) {
   // Run r uses seed SEED + r: the last one must not wrap past 2^64 - 1.
   if (args.seed > UINT64_MAX - static_cast<std::uint64_t>(args.runs - 1)) {
-    throw std::invalid_argument("--seed + --runs - 1 must be at most " + std::to_string(UINT64_MAX) +
+    throw InvalidArgument("--seed + --runs - 1 must be at most " + std::to_string(UINT64_MAX) +
                                 ", found " + std::to_string(args.seed) + " + " + std::to_string(args.runs) +
                                 " - 1");
   }

@@ -55,9 +55,12 @@ int main(int argc, char** argv) {
   } catch (const std::filesystem::filesystem_error& e) {
     std::fprintf(stderr, "seif: %s\n", e.what());
     return 2;
-  } catch (const std::invalid_argument& e) {
+  } catch (const InvalidArgument& e) {
     std::fprintf(stderr, "seif: %s\n", e.what());
     return 1;
+  } catch (const Error& e) {
+    std::fprintf(stderr, "seif: %s\n", e.what());
+    return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "seif: error: %s\n", e.what());
     return 2;

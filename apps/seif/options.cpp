@@ -83,7 +83,7 @@ CLI::Validator seedValue() {
 }
 
 void requireOutputFolder(const std::string& out) {
-  if (out.empty()) throw std::invalid_argument("--out: must not be empty");
+  if (out.empty()) throw InvalidArgument("--out: must not be empty");
   requireWritableDirectory(out);
 }
 
@@ -122,7 +122,7 @@ CLI::Validator filterSpecs() {
       [](std::string& s) -> std::string {
         try {
           for (const std::string& f : splitFilterList(s)) parseFilterSpec(f);
-        } catch (const std::invalid_argument& e) {
+        } catch (const InvalidArgument& e) {
           return e.what();
         }
         return {};

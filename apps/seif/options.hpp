@@ -36,7 +36,7 @@ CLI::Validator filterSpecs();
 CLI::Validator seedValue();
 
 /// Checks a command's output folder before any work: empty is a usage error
-/// (std::invalid_argument); otherwise seif::requireWritableDirectory, which creates the
+/// (InvalidArgument); otherwise seif::requireWritableDirectory, which creates the
 /// folder and throws DataError naming it when it is not a folder or not writable (exit 2).
 void requireOutputFolder(const std::string& out);
 

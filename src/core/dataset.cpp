@@ -85,7 +85,7 @@ Dataset buildDataset(const RobotLog& log) {
 }
 
 Pose2 interpolatePose(const std::vector<TimedPose>& track, double t) {
-  if (track.empty()) throw std::invalid_argument("interpolatePose: empty track");
+  if (track.empty()) throw InvalidArgument("interpolatePose: empty track");
   if (!(t > track.front().time)) return track.front().pose;  // also catches NaN
   if (t >= track.back().time) return track.back().pose;
   // First sample strictly after t; the one before it is at or before t.

@@ -98,7 +98,7 @@ void SparseMarginals::computeColumnsFor(int column) const {
 double SparseMarginals::covariance(Eigen::Index i, Eigen::Index j) const {
   const Eigen::Index n = size();
   if (i < 0 || j < 0 || i >= n || j >= n) {
-    throw std::out_of_range("SparseMarginals: entry (" + std::to_string(i) + ", " + std::to_string(j) +
+    throw InvalidArgument("SparseMarginals: entry (" + std::to_string(i) + ", " + std::to_string(j) +
                             ") outside a " + std::to_string(n) + "-variable system");
   }
   const int a = impl_->position[i], c = impl_->position[j];
@@ -110,7 +110,7 @@ double SparseMarginals::covariance(Eigen::Index i, Eigen::Index j) const {
   const int* last = rows + L.outerIndexPtr()[col + 1];
   const int* hit = std::lower_bound(first, last, row);
   if (hit == last || *hit != row) {
-    throw std::out_of_range("SparseMarginals: entry (" + std::to_string(i) + ", " + std::to_string(j) +
+    throw InvalidArgument("SparseMarginals: entry (" + std::to_string(i) + ", " + std::to_string(j) +
                             ") is not in the pattern of the factor");
   }
   return impl_->Z[static_cast<std::size_t>(hit - rows)];

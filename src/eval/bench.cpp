@@ -67,8 +67,8 @@ bool resetPeakMemory() {
 }
 
 BenchMeasurement runBenchCase(const BenchCase& c) {
-  if (c.landmarks < 1) throw std::invalid_argument("bench: the number of landmarks must be >= 1");
-  if (c.window < 1) throw std::invalid_argument("bench: the window must be >= 1 step");
+  if (c.landmarks < 1) throw InvalidArgument("bench: the number of landmarks must be >= 1");
+  if (c.window < 1) throw InvalidArgument("bench: the window must be >= 1 step");
   using Clock = std::chrono::steady_clock;
   BenchMeasurement m;
   m.filter = c.filter;
@@ -148,7 +148,7 @@ double stepCostExponent(std::string_view filter) {
   if (filter == "ekf") return 2.0;
   if (filter == "eif") return 3.0;
   if (filter == "seif") return 0.0;
-  throw std::invalid_argument("unknown filter '" + std::string(filter) + "' (expected ekf, eif or seif)");
+  throw InvalidArgument("unknown filter '" + std::string(filter) + "' (expected ekf, eif or seif)");
 }
 
 double denseMatrixBytes(std::string_view filter, int landmarks) {
@@ -159,7 +159,7 @@ double denseMatrixBytes(std::string_view filter, int landmarks) {
 
 BenchEstimate estimateBenchCase(std::string_view filter, int landmarks, double steps,
                                 std::span<const BenchPoint> measured) {
-  if (measured.empty()) throw std::invalid_argument("estimateBenchCase: needs a measured case");
+  if (measured.empty()) throw InvalidArgument("estimateBenchCase: needs a measured case");
   BenchEstimate e;
   const double p0 = stepCostExponent(filter);
   const BenchPoint& a = measured.back();

@@ -164,9 +164,9 @@ NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const st
 
 ConsistencyResult runConsistency(const ConsistencyOptions& options,
                                  const std::function<void(std::size_t, std::size_t)>& progress) {
-  if (options.runs < 1) throw std::invalid_argument("consistency: runs must be >= 1");
-  if (options.samples < 1) throw std::invalid_argument("consistency: samples must be >= 1");
-  if (options.filters.empty()) throw std::invalid_argument("consistency: no filter given");
+  if (options.runs < 1) throw InvalidArgument("consistency: runs must be >= 1");
+  if (options.samples < 1) throw InvalidArgument("consistency: samples must be >= 1");
+  if (options.filters.empty()) throw InvalidArgument("consistency: no filter given");
   const std::size_t runs = static_cast<std::size_t>(options.runs);
   const std::size_t nf = options.filters.size();
   std::vector<std::vector<FilterRun>> results(runs);  // [run][filter]

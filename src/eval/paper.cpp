@@ -155,7 +155,7 @@ FilterSnapshot snapshotById(const SlamFilter& filter) {
   const Eigen::MatrixXd P = filter.covariance();
   const Eigen::MatrixXd H = filter.information();
   if (mu.size() != dim || P.rows() != dim || H.rows() != dim) {
-    throw std::logic_error("snapshotById: the filter's state size disagrees with its landmarks");
+    throw InvalidArgument("snapshotById: the filter's state size disagrees with its landmarks");
   }
   s.mean.resize(dim);
   s.covariance.resize(dim, dim);

@@ -224,7 +224,7 @@ std::vector<TimedPose> deadReckoning(const Dataset& data, const Pose2& start, co
 double alignedRmse(const std::vector<Vec2>& estimate, const std::vector<Vec2>& truth,
                    Alignment alignment, std::vector<double>* residuals) {
   const std::size_t n = estimate.size();
-  if (n == 0 || n != truth.size()) throw std::invalid_argument("alignedRmse: point sets differ in size");
+  if (n == 0 || n != truth.size()) throw InvalidArgument("alignedRmse: point sets differ in size");
   Eigen::Matrix2d R = Eigen::Matrix2d::Identity();
   Vec2 t = Vec2::Zero();
   if (alignment == Alignment::Rigid && n >= 2) {

@@ -1,3 +1,4 @@
+#include <seif/core/errors.hpp>
 #include <seif/eval/stats.hpp>
 
 #include <algorithm>
@@ -73,7 +74,7 @@ double betaContinuedFraction(double a, double b, double x) {
 
 double incompleteBeta(double a, double b, double x) {
   if (!(a > 0.0) || !(b > 0.0) || !(x >= 0.0 && x <= 1.0)) {
-    throw std::invalid_argument("incompleteBeta: needs a, b > 0 and x in [0, 1]");
+    throw InvalidArgument("incompleteBeta: needs a, b > 0 and x in [0, 1]");
   }
   if (x == 0.0 || x == 1.0) return x;
   const double log_front = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) +
@@ -84,7 +85,7 @@ double incompleteBeta(double a, double b, double x) {
 }
 
 double studentTCdf(double t, double dof) {
-  if (!(dof > 0.0)) throw std::invalid_argument("studentTCdf: dof must be positive");
+  if (!(dof > 0.0)) throw InvalidArgument("studentTCdf: dof must be positive");
   if (std::isnan(t)) return t;
   if (std::isinf(t)) return t > 0 ? 1.0 : 0.0;
   const double tail = 0.5 * incompleteBeta(0.5 * dof, 0.5, dof / (dof + t * t));  // P(T > |t|)
@@ -92,8 +93,8 @@ double studentTCdf(double t, double dof) {
 }
 
 double studentTQuantile(double p, double dof) {
-  if (!(p > 0.0 && p < 1.0)) throw std::invalid_argument("studentTQuantile: p must be in (0, 1)");
-  if (!(dof > 0.0)) throw std::invalid_argument("studentTQuantile: dof must be positive");
+  if (!(p > 0.0 && p < 1.0)) throw InvalidArgument("studentTQuantile: p must be in (0, 1)");
+  if (!(dof > 0.0)) throw InvalidArgument("studentTQuantile: dof must be positive");
   if (p == 0.5) return 0.0;
   if (p < 0.5) return -studentTQuantile(1.0 - p, dof);
   if (dof == 1.0) return std::tan(std::numbers::pi * (p - 0.5));  // Cauchy
@@ -118,7 +119,7 @@ double studentTQuantile(double p, double dof) {
 }
 
 double incompleteGamma(double a, double x) {
-  if (!(a > 0.0) || !(x >= 0.0)) throw std::invalid_argument("incompleteGamma: needs a > 0 and x >= 0");
+  if (!(a > 0.0) || !(x >= 0.0)) throw InvalidArgument("incompleteGamma: needs a > 0 and x >= 0");
   if (x == 0.0) return 0.0;
   if (std::isinf(x)) return 1.0;
   const double log_front = a * std::log(x) - x - std::lgamma(a);
@@ -149,13 +150,13 @@ double incompleteGamma(double a, double x) {
 }
 
 double chiSquareCdf(double x, double dof) {
-  if (!(dof > 0.0)) throw std::invalid_argument("chiSquareCdf: dof must be positive");
+  if (!(dof > 0.0)) throw InvalidArgument("chiSquareCdf: dof must be positive");
   return x <= 0.0 ? 0.0 : incompleteGamma(0.5 * dof, 0.5 * x);
 }
 
 double chiSquareQuantile(double p, double dof) {
-  if (!(p > 0.0 && p < 1.0)) throw std::invalid_argument("chiSquareQuantile: p must be in (0, 1)");
-  if (!(dof > 0.0)) throw std::invalid_argument("chiSquareQuantile: dof must be positive");
+  if (!(p > 0.0 && p < 1.0)) throw InvalidArgument("chiSquareQuantile: p must be in (0, 1)");
+  if (!(dof > 0.0)) throw InvalidArgument("chiSquareQuantile: dof must be positive");
   double lo = 0.0, hi = std::max(1.0, 2.0 * dof);
   while (chiSquareCdf(hi, dof) < p) {
     lo = hi;
@@ -169,7 +170,7 @@ double chiSquareQuantile(double p, double dof) {
 }
 
 Band neesBand95(std::size_t samples, int dof) {
-  if (samples == 0 || dof <= 0) throw std::invalid_argument("neesBand95: needs samples > 0 and dof > 0");
+  if (samples == 0 || dof <= 0) throw InvalidArgument("neesBand95: needs samples > 0 and dof > 0");
   const double n = static_cast<double>(samples);
   const double k = n * dof;
   return {chiSquareQuantile(0.025, k) / n, chiSquareQuantile(0.975, k) / n};

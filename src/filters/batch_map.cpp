@@ -82,7 +82,7 @@ BatchMap::BatchMap(const Pose2& initial_pose, const FilterConfig& config)
                c.linearization = seif::Linearization::Standard;
                return c;
              }()),
-      gate_(config.outlier_gate),
+      book_("batch", initial_pose, config),
       guess_{initial_pose},
       cost_(kNaN),
       violation_(kNaN) {}
@@ -110,48 +110,38 @@ void BatchMap::predict(const MotionInput& u) {
 
 void BatchMap::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
   if (&sensor != &sensorModel()) throw ModelError("batch: only the config's sensor is supported");
-  for (const Observation& z : observations) requireAssociated(z, "batch");
-  invalidate();
   // The EKF's gate, at the inner EKF's estimate: a landmark first seen in this update is
   // gated at its initialisation from that first sighting, as the EKF does.
-  const Pose2 x = inner_.pose();
+  const std::span<const PlannedObservation> plan = book_.plan(
+      observations, sensor, inner_.pose(), [&](int slot) { return inner_.landmark(book_.ids()[static_cast<std::size_t>(slot)]); });
+  invalidate();
   const int k = static_cast<int>(guess_.size()) - 1;
-  std::unordered_map<int, Vec2> fresh;
   std::vector<Observation> accepted;
-  accepted.reserve(observations.size());
-  for (const Observation& z : observations) {
-    const Mat2& R = sensor.noise(z);
-    const auto it = fresh.find(z.landmark);
-    if (it == fresh.end() && index_.find(z.landmark) < 0) {
-      fresh.emplace(z.landmark, sensor.inverse(x, z.z));
-    } else if (gate_.rejects(sensor, x, it != fresh.end() ? it->second : inner_.landmark(z.landmark), z,
-                             R.inverse())) {
-      continue;
-    }
-    int slot = index_.find(z.landmark);
-    if (slot < 0) {
-      slot = index_.add(z.landmark);
+  accepted.reserve(plan.size());
+  for (const PlannedObservation& p : plan) {
+    if (p.first) {
       last_linked_pose_.push_back(-1);
       pose_links_.push_back(0);
     }
-    const auto s = static_cast<std::size_t>(slot);
+    const auto s = static_cast<std::size_t>(p.slot);
     if (last_linked_pose_[s] != k) {
       last_linked_pose_[s] = k;
       ++pose_links_[s];
       ++pose_landmark_links_;
       ++last_pose_links_;
     }
-    measurements_.push_back({k, slot, z.z, R.inverse()});
-    accepted.push_back(z);
+    measurements_.push_back({k, p.slot, p.z->z, sensor.noise(*p.z).inverse()});
+    accepted.push_back(*p.z);
   }
+  book_.commit();
   inner_.update(accepted, sensor);
   guess_.back() = inner_.pose();
 }
 
 void BatchMap::finish() {
   std::vector<Vec2> landmarks;
-  landmarks.reserve(index_.ids().size());
-  for (int id : index_.ids()) landmarks.push_back(inner_.landmark(id));
+  landmarks.reserve(book_.ids().size());
+  for (int id : book_.ids()) landmarks.push_back(inner_.landmark(id));
   optimizeFrom(guess_, landmarks);
 }
 
@@ -275,9 +265,9 @@ void BatchMap::linearize(const std::vector<Pose2>& poses, const std::vector<Vec2
 }
 
 void BatchMap::requireSizes(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks) const {
-  if (poses.size() != inputs_.size() + 1 || landmarks.size() != index_.ids().size()) {
-    throw std::invalid_argument("batch: needs " + std::to_string(inputs_.size() + 1) + " poses and " +
-                                std::to_string(index_.ids().size()) + " landmarks, got " +
+  if (poses.size() != inputs_.size() + 1 || landmarks.size() != book_.ids().size()) {
+    throw InvalidArgument("batch: needs " + std::to_string(inputs_.size() + 1) + " poses and " +
+                                std::to_string(book_.ids().size()) + " landmarks, got " +
                                 std::to_string(poses.size()) + " and " + std::to_string(landmarks.size()));
   }
 }
@@ -371,7 +361,7 @@ void BatchMap::optimizeFrom(const std::vector<Pose2>& poses_in, const std::vecto
 }
 
 const BatchMap::Solution& BatchMap::solution(const char* what) const {
-  if (!solution_) throw std::logic_error(std::string("batch: ") + what + " needs a solution (call finish())");
+  if (!solution_) throw InvalidArgument(std::string("batch: ") + what + " needs a solution (call finish())");
   return *solution_;
 }
 
@@ -409,7 +399,7 @@ Pose2 BatchMap::pose() const { return solution_ ? wrapHeading(solution_->poses.b
 
 Vec2 BatchMap::landmark(int id) const {
   if (!solution_) return inner_.landmark(id);
-  return solution_->landmarks[static_cast<std::size_t>(index_.require(id, "batch"))];
+  return solution_->landmarks[static_cast<std::size_t>(book_.require(id))];
 }
 
 Mat3 BatchMap::poseCovariance() const {
@@ -421,7 +411,7 @@ Mat3 BatchMap::poseCovariance() const {
 
 Mat2 BatchMap::landmarkCovariance(int id) const {
   if (!solution_) return inner_.landmarkCovariance(id);
-  const int slot = index_.require(id, "batch");
+  const int slot = book_.require(id);
   if (solution_->covariance) return solution_->covariance->block<2, 2>(3 + 2 * slot, 3 + 2 * slot);
   const Eigen::Index l = landmarkVar(slot);
   return marginal({l, l + 1});
@@ -429,7 +419,7 @@ Mat2 BatchMap::landmarkCovariance(int id) const {
 
 PredictedMeasurement BatchMap::predictMeasurement(int id, const MeasurementModel& sensor, const Mat2& R) const {
   if (!solution_) return inner_.predictMeasurement(id, sensor, R);
-  const int slot = index_.require(id, "batch");
+  const int slot = book_.require(id);
   const Eigen::Index T = 3 * static_cast<Eigen::Index>(inputs_.size());
   const Eigen::Index l = landmarkVar(slot);
   const Eigen::MatrixXd P = marginal({T, T + 1, T + 2, l, l + 1});
@@ -439,7 +429,7 @@ PredictedMeasurement BatchMap::predictMeasurement(int id, const MeasurementModel
 
 FilterStats BatchMap::stats() const {
   FilterStats s;
-  s.landmarks = index_.ids().size();
+  s.landmarks = book_.ids().size();
   s.links = inputs_.size() + pose_landmark_links_;
   s.robot_links = last_pose_links_;
   for (std::size_t n : pose_links_) s.max_landmark_links = std::max(s.max_landmark_links, n);
@@ -462,7 +452,7 @@ Eigen::MatrixXd BatchMap::covariance() const {
     std::vector<Eigen::Index> rows;
     const Eigen::Index T = 3 * static_cast<Eigen::Index>(inputs_.size());
     for (Eigen::Index i = 0; i < 3; ++i) rows.push_back(T + i);
-    for (int s = 0; s < index_.size(); ++s) {
+    for (int s = 0; s < book_.size(); ++s) {
       rows.push_back(landmarkVar(s));
       rows.push_back(landmarkVar(s) + 1);
     }

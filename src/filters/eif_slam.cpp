@@ -9,16 +9,15 @@
 namespace seif {
 
 EifSlam::EifSlam(const Pose2& initial_pose, const FilterConfig& config)
-    : SlamFilter(config), config_(config), gate_(config.outlier_gate), H_(Mat3::Zero()), b_(Vec3::Zero()), mu_(initial_pose) {
+    : SlamFilter(config), config_(config), book_("eif", initial_pose, config), H_(Mat3::Zero()), b_(Vec3::Zero()), mu_(initial_pose) {
   H_.diagonal() = config.initial_pose_sigma.cwiseAbs2().cwiseInverse();
   b_ = H_ * mu_;
-  if (config.linearization == Linearization::FirstEstimates) fej_.emplace(initial_pose);
 }
 
 Pose2 EifSlam::pose() const { return wrapHeading(Pose2(mu_.head<3>())); }
 
 Vec2 EifSlam::landmark(int id) const {
-  return mu_.segment<2>(LandmarkIndex::stateIndex(index_.require(id, "eif")));
+  return mu_.segment<2>(StateLayout::landmark(book_.require(id)));
 }
 
 const Eigen::LLT<Eigen::MatrixXd>& EifSlam::factor() const {
@@ -41,7 +40,7 @@ Mat3 EifSlam::poseCovariance() const {
 }
 
 Mat2 EifSlam::landmarkCovariance(int id) const {
-  const int i = LandmarkIndex::stateIndex(index_.require(id, "eif"));
+  const int i = StateLayout::landmark(book_.require(id));
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(H_.rows(), 2);
   E.middleRows<2>(i).setIdentity();
   return factor().solve(E).middleRows<2>(i);
@@ -51,15 +50,15 @@ FilterStats EifSlam::stats() const { return denseLinkStats(H_); }
 
 std::size_t EifSlam::robotLinks() const {
   std::size_t n = 0;
-  for (int s = 0; s < index_.size(); ++s) {
-    if (H_.block<3, 2>(0, LandmarkIndex::stateIndex(s)).cwiseAbs().maxCoeff() > 0.0) ++n;
+  for (int s = 0; s < book_.size(); ++s) {
+    if (H_.block<3, 2>(0, StateLayout::landmark(s)).cwiseAbs().maxCoeff() > 0.0) ++n;
   }
   return n;
 }
 
 PredictedMeasurement EifSlam::predictMeasurement(int id, const MeasurementModel& sensor,
                                                 const Mat2& R) const {
-  const int i = LandmarkIndex::stateIndex(index_.require(id, "eif"));
+  const int i = StateLayout::landmark(book_.require(id));
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(H_.rows(), 5);
   E.topLeftCorner<3, 3>().setIdentity();
   E.block<2, 2>(i, 3).setIdentity();
@@ -69,7 +68,7 @@ PredictedMeasurement EifSlam::predictMeasurement(int id, const MeasurementModel&
 }
 
 void EifSlam::predict(const MotionIncrement& increment) {
-  const MotionIncrement m = fej_ ? fej_->fejIncrement(increment, mu_.head<2>()) : increment;
+  const MotionIncrement m = book_.motionIncrement(increment, mu_.head<2>());
   Eigen::MatrixXd workspace(6, H_.cols());
   informationMotionUpdate(H_, b_, mu_, m.delta, m.J_delta_x, m.U, workspace);
   llt_valid_ = false;
@@ -81,12 +80,27 @@ void EifSlam::recoverMean() {
 
 void EifSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
   if (observations.empty()) return;
+  const std::span<const PlannedObservation> plan = book_.plan(
+      observations, sensor, mu_.head<3>(), [&](int slot) { return Vec2(mu_.segment<2>(StateLayout::landmark(slot))); });
+  // All or nothing: a failure (an indefinite H) restores the state before the update.
+  const Eigen::MatrixXd H0 = H_;
+  const Eigen::VectorXd b0 = b_, mu0 = mu_;
+  try {
+    applyPlan(plan, sensor);
+  } catch (...) {
+    H_ = H0;
+    b_ = b0;
+    mu_ = mu0;
+    llt_valid_ = false;
+    throw;
+  }
+  book_.commit();
+}
+
+void EifSlam::applyPlan(std::span<const PlannedObservation> plan, const MeasurementModel& sensor) {
   // New landmarks enter with no information and the inverse-model mean (algorithm.md).
-  for (const Observation& z : observations) {
-    requireAssociated(z, "eif");
-    if (index_.find(z.landmark) >= 0) continue;
-    const Vec2 y = sensor.inverse(mu_.head<3>(), z.z);
-    index_.add(z.landmark);
+  for (const PlannedObservation& p : plan) {
+    if (!p.first) continue;
     const Eigen::Index n = H_.rows();
     H_.conservativeResize(n + 2, n + 2);
     H_.rightCols<2>().setZero();
@@ -94,20 +108,15 @@ void EifSlam::update(std::span<const Observation> observations, const Measuremen
     b_.conservativeResize(n + 2);
     b_.tail<2>().setZero();
     mu_.conservativeResize(n + 2);
-    mu_.tail<2>() = y;
-    if (fej_) fej_->addLandmark(y);
+    mu_.tail<2>() = p.initial;
   }
   // Paper eq. (21-22), all observations linearised at the prior mean (with FEJ: each
-  // landmark's Jacobians at its first estimate); gross outliers (OutlierGate) are dropped.
+  // landmark's Jacobians at its first estimate); gross outliers are not in the plan.
   const Pose2 x = mu_.head<3>();
-  for (const Observation& z : observations) {
-    const int slot = index_.find(z.landmark);
-    const Eigen::Index l = LandmarkIndex::stateIndex(slot);
-    const Mat2 Z_inv = sensor.noise(z).inverse();
-    if (gate_.rejects(sensor, x, mu_.segment<2>(l), z, Z_inv)) continue;
-    const MeasurementInformation info =
-        measurementInformation(sensor, x, mu_.segment<2>(l), z, Z_inv,
-                               fej_ ? std::optional<Vec2>(fej_->landmark(slot)) : std::nullopt);
+  for (const PlannedObservation& p : plan) {
+    const Eigen::Index l = StateLayout::landmark(p.slot);
+    const MeasurementInformation info = measurementInformation(sensor, x, mu_.segment<2>(l), *p.z,
+                                                               sensor.noise(*p.z).inverse(), p.jacobian_landmark);
     H_.topLeftCorner<3, 3>() += info.H.topLeftCorner<3, 3>();
     H_.block<3, 2>(0, l) += info.H.topRightCorner<3, 2>();
     H_.block<2, 3>(l, 0) += info.H.bottomLeftCorner<2, 3>();

@@ -10,19 +10,18 @@
 namespace seif {
 
 EkfSlam::EkfSlam(const Pose2& initial_pose, const FilterConfig& config)
-    : SlamFilter(config), config_(config), gate_(config.outlier_gate), mu_(initial_pose), sigma_(Mat3::Zero()) {
+    : SlamFilter(config), config_(config), book_("ekf", initial_pose, config), mu_(initial_pose), sigma_(Mat3::Zero()) {
   sigma_.diagonal() = config.initial_pose_sigma.cwiseAbs2();
-  if (config.linearization == Linearization::FirstEstimates) fej_.emplace(initial_pose);
 }
 
 Pose2 EkfSlam::pose() const { return wrapHeading(Pose2(mu_.head<3>())); }
 
 Vec2 EkfSlam::landmark(int id) const {
-  return mu_.segment<2>(LandmarkIndex::stateIndex(index_.require(id, "ekf")));
+  return mu_.segment<2>(StateLayout::landmark(book_.require(id)));
 }
 
 Mat2 EkfSlam::landmarkCovariance(int id) const {
-  const int i = LandmarkIndex::stateIndex(index_.require(id, "ekf"));
+  const int i = StateLayout::landmark(book_.require(id));
   return sigma_.block<2, 2>(i, i);
 }
 
@@ -37,13 +36,13 @@ FilterStats EkfSlam::stats() const { return denseLinkStats(information()); }
 
 PredictedMeasurement EkfSlam::predictMeasurement(int id, const MeasurementModel& sensor,
                                                 const Mat2& R) const {
-  const int i = LandmarkIndex::stateIndex(index_.require(id, "ekf"));
+  const int i = StateLayout::landmark(book_.require(id));
   return innovation(sensor, mu_.head<3>(), mu_.segment<2>(i), sigma_.topLeftCorner<3, 3>(),
                     sigma_.block<3, 2>(0, i), sigma_.block<2, 2>(i, i), R);
 }
 
 void EkfSlam::predict(const MotionIncrement& increment) {
-  const MotionIncrement m = fej_ ? fej_->fejIncrement(increment, mu_.head<2>()) : increment;
+  const MotionIncrement m = book_.motionIncrement(increment, mu_.head<2>());
   const Mat3& U = m.U;
   const Vec3& delta = m.delta;
   const Mat3 G = Mat3::Identity() + m.J_delta_x;
@@ -62,10 +61,8 @@ void EkfSlam::addLandmark(const Observation& z, const MeasurementModel& sensor) 
   const Vec2 y = sensor.inverse(mu_.head<3>(), z.z, &G_x, &G_z);
   const Mat2& Z = sensor.noise(z);
   const Eigen::Index n = sigma_.rows();
-  index_.add(z.landmark);
   mu_.conservativeResize(n + 2);
   mu_.tail<2>() = y;
-  if (fej_) fej_->addLandmark(y);
   const Eigen::MatrixXd cross = G_x * sigma_.topRows<3>();  // 2 x n
   sigma_.conservativeResize(n + 2, n + 2);
   sigma_.bottomLeftCorner(2, n) = cross;
@@ -78,17 +75,29 @@ void EkfSlam::update(std::span<const Observation> observations, const Measuremen
   // A landmark's first observation initialises it (and carries no other information);
   // all other observations form one joint update linearised at the prior mean (with FEJ:
   // each landmark's Jacobians at its first estimate, Huang et al. 2010, the FEJ-EKF).
-  // Gross outliers (OutlierGate) are dropped first.
-  std::vector<const Observation*> updates;
-  updates.reserve(observations.size());
-  for (const Observation& z : observations) {
-    requireAssociated(z, "ekf");
-    const int slot = index_.find(z.landmark);
-    if (slot < 0) {
-      addLandmark(z, sensor);
-    } else if (!gate_.rejects(sensor, mu_.head<3>(), mu_.segment<2>(LandmarkIndex::stateIndex(slot)), z,
-                              sensor.noise(z).inverse())) {
-      updates.push_back(&z);
+  // The book leaves out gross outliers (OutlierGate). All or nothing: a failure rolls the
+  // new landmarks back (they only appended rows and columns).
+  const std::span<const PlannedObservation> plan = book_.plan(
+      observations, sensor, mu_.head<3>(), [&](int slot) { return Vec2(mu_.segment<2>(StateLayout::landmark(slot))); });
+  const Eigen::Index n0 = sigma_.rows();
+  try {
+    applyPlan(plan, sensor);
+  } catch (...) {
+    mu_.conservativeResize(n0);
+    sigma_.conservativeResize(n0, n0);
+    throw;
+  }
+  book_.commit();
+}
+
+void EkfSlam::applyPlan(std::span<const PlannedObservation> plan, const MeasurementModel& sensor) {
+  std::vector<const PlannedObservation*> updates;
+  updates.reserve(plan.size());
+  for (const PlannedObservation& p : plan) {
+    if (p.first) {
+      addLandmark(*p.z, sensor);
+    } else {
+      updates.push_back(&p);
     }
   }
   if (updates.empty()) return;
@@ -103,12 +112,11 @@ void EkfSlam::update(std::span<const Observation> observations, const Measuremen
   std::vector<Eigen::Index> li(updates.size());
   const Pose2 x = mu_.head<3>();
   for (std::size_t k = 0; k < updates.size(); ++k) {
-    const Observation& z = *updates[k];
-    const int slot = index_.find(z.landmark);
-    li[k] = LandmarkIndex::stateIndex(slot);
+    const PlannedObservation& p = *updates[k];
+    li[k] = StateLayout::landmark(p.slot);
     const Vec2 zhat = sensor.predict(x, mu_.segment<2>(li[k]), &Jx[k], &Jy[k]);
-    if (fej_) sensor.predict(x, fej_->landmark(slot), &Jx[k], &Jy[k]);
-    nu.segment<2>(2 * static_cast<Eigen::Index>(k)) = sensor.residual(z.z, zhat);
+    if (p.jacobian_landmark) sensor.predict(x, *p.jacobian_landmark, &Jx[k], &Jy[k]);
+    nu.segment<2>(2 * static_cast<Eigen::Index>(k)) = sensor.residual(p.z->z, zhat);
     PJt.middleCols<2>(2 * static_cast<Eigen::Index>(k)) =
         sigma_.leftCols<3>() * Jx[k].transpose() + sigma_.middleCols<2>(li[k]) * Jy[k].transpose();
   }
@@ -116,14 +124,14 @@ void EkfSlam::update(std::span<const Observation> observations, const Measuremen
     // S = J Sigma J^T + R, row block k = Jx_k (Sigma J^T)_x + Jy_k (Sigma J^T)_l
     S.middleRows<2>(2 * static_cast<Eigen::Index>(k)) =
         Jx[k] * PJt.topRows<3>() + Jy[k] * PJt.middleRows<2>(li[k]);
-    S.block<2, 2>(2 * static_cast<Eigen::Index>(k), 2 * static_cast<Eigen::Index>(k)) += sensor.noise(*updates[k]);
+    S.block<2, 2>(2 * static_cast<Eigen::Index>(k), 2 * static_cast<Eigen::Index>(k)) += sensor.noise(*updates[k]->z);
   }
   S = (0.5 * (S + S.transpose())).eval();
   Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success) {
     std::ostringstream msg;
     msg << "ekf: innovation covariance is not positive definite (landmark "
-        << updates.front()->landmark << ")";
+        << updates.front()->z->landmark << ")";
     throw NumericError(msg.str());
   }
   const Eigen::MatrixXd K = llt.solve(PJt.transpose()).transpose();  // n x m

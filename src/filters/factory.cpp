@@ -1,3 +1,4 @@
+#include <seif/core/errors.hpp>
 #include <seif/filters/batch_map.hpp>
 #include <seif/filters/eif_slam.hpp>
 #include <seif/filters/ekf_slam.hpp>
@@ -12,7 +13,7 @@ namespace seif {
 namespace {
 
 [[noreturn]] void badSpec(std::string_view text, const std::string& what) {
-  throw std::invalid_argument("filter '" + std::string(text) + "': " + what);
+  throw InvalidArgument("filter '" + std::string(text) + "': " + what);
 }
 
 int parseInt(std::string_view text, std::string_view key, std::string_view value) {
@@ -71,7 +72,7 @@ FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, c
                           "' (seif takes linearization, sparsify, beta, active, relax, mean, deactivate, "
                           "recovery, relax-order, covariance, seed)");
       }
-    } catch (const std::invalid_argument& e) {
+    } catch (const InvalidArgument& e) {
       const std::string what = e.what();
       if (what.rfind("filter '", 0) == 0) throw;
       badSpec(text, what);
@@ -85,10 +86,10 @@ std::vector<std::string> splitFilterList(std::string_view list) {
   while (true) {
     const std::size_t comma = list.find(',');
     const std::string_view item = list.substr(0, comma);
-    if (item.empty()) throw std::invalid_argument("filter list '" + std::string(list) + "': an empty item");
+    if (item.empty()) throw InvalidArgument("filter list '" + std::string(list) + "': an empty item");
     const bool option = item.find('=') != std::string_view::npos && item.find(':') == std::string_view::npos;
     if (option) {
-      if (specs.empty()) throw std::invalid_argument("filter list: option '" + std::string(item) + "' before any filter");
+      if (specs.empty()) throw InvalidArgument("filter list: option '" + std::string(item) + "' before any filter");
       specs.back().append(",").append(item);
     } else {
       specs.emplace_back(item);
@@ -106,7 +107,7 @@ std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& star
   if (spec.name == "eif") return std::make_unique<EifSlam>(start, c);
   if (spec.name == "seif") return std::make_unique<SeifSlam>(start, c, spec.seif);
   if (spec.name == "batch") return std::make_unique<BatchMap>(start, c);
-  throw std::invalid_argument("unknown filter '" + spec.name + "' (expected ekf, eif, seif or batch)");
+  throw InvalidArgument("unknown filter '" + spec.name + "' (expected ekf, eif, seif or batch)");
 }
 
 std::unique_ptr<SlamFilter> makeFilter(std::string_view spec, const Pose2& start,

@@ -5,6 +5,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
+#include <cmath>
+#include <string>
 
 namespace seif {
 
@@ -20,8 +22,15 @@ void informationMotionUpdate(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Ve
   // The robot is linked only to variables in this block, so r_x is exact here.
   const Vec3 r_x = b.head<3>() - H.topRows<3>() * mu;
   b.noalias() -= H * mu;
-  // G_x = I + A_x; A_x has only a heading column, so G_x^-1 = I - A_x exactly.
-  const Mat3 G_inv = Mat3::Identity() - J_delta_x;
+  // G_x = I + dDelta/dx, any 3x3 motion Jacobian (algorithm.md §1). Its inverse by
+  // cofactors: for the planar models' heading-only Jacobians this is I - dDelta/dx to the
+  // last bit (unit determinant, products with 0 and 1 exact).
+  const Mat3 G = Mat3::Identity() + J_delta_x;
+  const double det = G.determinant();
+  if (!(std::abs(det) > 1e-12)) {
+    throw NumericError("motion update: the motion Jacobian I + dDelta/dx is singular (det " + std::to_string(det) + ")");
+  }
+  const Mat3 G_inv = G.inverse();
   // Phi = G^-T H G^-1: G^-1 differs from I only in the robot block.
   for (Eigen::Index j = 0; j < n; ++j) {
     const Vec3 col = H.col(j).head<3>();

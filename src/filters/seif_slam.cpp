@@ -27,57 +27,56 @@ bool wellConditioned(const Mat3& A) {
 SeifOptions::Mean SeifOptions::parseMean(std::string_view s) {
   if (s == "amortized") return Mean::Amortized;
   if (s == "exact") return Mean::Exact;
-  throw std::invalid_argument("unknown mean recovery '" + std::string(s) +
+  throw InvalidArgument("unknown mean recovery '" + std::string(s) +
                               "' (expected amortized or exact)");
 }
 
 SeifOptions::Deactivate SeifOptions::parseDeactivate(std::string_view s) {
   if (s == "weakest") return Deactivate::Weakest;
   if (s == "oldest") return Deactivate::Oldest;
-  throw std::invalid_argument("unknown deactivation rule '" + std::string(s) +
+  throw InvalidArgument("unknown deactivation rule '" + std::string(s) +
                               "' (expected weakest or oldest)");
 }
 
 SeifOptions::Recovery SeifOptions::parseRecovery(std::string_view s) {
   if (s == "after-update") return Recovery::AfterMeasurement;
   if (s == "before-update") return Recovery::BeforeMeasurement;
-  throw std::invalid_argument("unknown recovery point '" + std::string(s) +
+  throw InvalidArgument("unknown recovery point '" + std::string(s) +
                               "' (expected after-update or before-update)");
 }
 
 SeifOptions::RelaxOrder SeifOptions::parseRelaxOrder(std::string_view s) {
   if (s == "random") return RelaxOrder::Random;
   if (s == "cyclic") return RelaxOrder::Cyclic;
-  throw std::invalid_argument("unknown relaxation order '" + std::string(s) +
+  throw InvalidArgument("unknown relaxation order '" + std::string(s) +
                               "' (expected random or cyclic)");
 }
 
 SeifOptions::Sparsify SeifOptions::parseSparsify(std::string_view s) {
   if (s == "seif") return Sparsify::Seif;
   if (s == "eseif") return Sparsify::Eseif;
-  throw std::invalid_argument("unknown sparsification '" + std::string(s) + "' (expected seif or eseif)");
+  throw InvalidArgument("unknown sparsification '" + std::string(s) + "' (expected seif or eseif)");
 }
 
 SeifOptions::Covariance SeifOptions::parseCovariance(std::string_view s) {
   if (s == "exact") return Covariance::Exact;
   if (s == "local") return Covariance::Local;
-  throw std::invalid_argument("unknown covariance recovery '" + std::string(s) + "' (expected exact or local)");
+  throw InvalidArgument("unknown covariance recovery '" + std::string(s) + "' (expected exact or local)");
 }
 
 SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const SeifOptions& options)
     : SlamFilter(config),
       config_(config),
-      gate_(config.outlier_gate),
+      book_("seif", initial_pose, config),
       options_(options),
       store_(config.initial_pose_sigma.cwiseAbs2().cwiseInverse().asDiagonal(), initial_pose),
       rng_(options.seed) {
   if (options.max_active < 1 || options.max_active >= kMaxLocalLandmarks) {
-    throw std::invalid_argument("seif: the number of active landmarks must be in 1.." +
+    throw InvalidArgument("seif: the number of active landmarks must be in 1.." +
                                 std::to_string(kMaxLocalLandmarks - 1));
   }
-  if (options.relax < 0) throw std::invalid_argument("seif: --relax must be >= 0");
-  if (config.linearization == Linearization::FirstEstimates) fej_.emplace(initial_pose);
-  if (options.eseif_beta < 2) throw std::invalid_argument("seif: eseif beta must be >= 2");
+  if (options.relax < 0) throw InvalidArgument("seif: --relax must be >= 0");
+  if (options.eseif_beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
   order_.reserve(kMaxLocalLandmarks + 1);
   ranking_.reserve(kMaxLocalLandmarks + 1);
   if (options.sparsify == SeifOptions::Sparsify::Eseif) {
@@ -97,7 +96,7 @@ void SeifSlam::invalidateFactor() { factor_.reset(); }
 void SeifSlam::predict(const MotionIncrement& increment) { motionUpdate(increment); }
 
 void SeifSlam::motionUpdate(const MotionIncrement& increment) {
-  const MotionIncrement m = fej_ ? fej_->fejIncrement(increment, store_.robotMean().head<2>()) : increment;
+  const MotionIncrement m = book_.motionIncrement(increment, store_.robotMean().head<2>());
   store_.beginStep();
   last_sparsification_residual_ = 0.0;
   // §1: Lemma 3 on the {robot, active} block, the only part of H that motion changes.
@@ -153,25 +152,21 @@ void SeifSlam::relaxMean(int sweeps) {
 void SeifSlam::measurementUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
   invalidateFactor();
   // §3, paper eq. (21-22): every observation linearised at the current mean (with FEJ:
-  // each landmark's Jacobians at its first estimate, Huang et al. 2010, the FEJ-EKF).
-  for (const Observation& z : observations) {
-    requireAssociated(z, "seif");
-    const Mat2 Z_inv = sensor.noise(z).inverse();
-    const Pose2 x = store_.robotMean();
-    int slot = store_.index().find(z.landmark);
-    if (slot < 0) {  // a new landmark: no information yet, mean from the inverse model
-      slot = store_.addLandmark(z.landmark, sensor.inverse(x, z.z));
-      if (fej_) fej_->addLandmark(store_.node(slot).mu);
-    } else if (gate_.rejects(sensor, x, store_.node(slot).mu, z, Z_inv)) {
-      continue;  // a gross outlier (OutlierGate)
-    }
-    const MeasurementInformation info =
-        measurementInformation(sensor, x, store_.node(slot).mu, z, Z_inv,
-                               fej_ ? std::optional<Vec2>(fej_->landmark(slot)) : std::nullopt);
-    store_.addObservation(slot, info.H, info.b);  // links it to the robot: active
+  // each landmark's Jacobians at its first estimate, Huang et al. 2010, the FEJ-EKF). A new
+  // landmark enters without information at its inverse-model mean; the book leaves gross
+  // outliers out.
+  const Pose2 x = store_.robotMean();
+  const std::span<const PlannedObservation> plan =
+      book_.plan(observations, sensor, x, [&](int slot) { return store_.node(slot).mu; });
+  for (const PlannedObservation& p : plan) {
+    if (p.first) store_.addLandmark(p.z->landmark, p.initial);
+    const MeasurementInformation info = measurementInformation(sensor, x, store_.node(p.slot).mu, *p.z,
+                                                               sensor.noise(*p.z).inverse(), p.jacobian_landmark);
+    store_.addObservation(p.slot, info.H, info.b);  // links it to the robot: active
     // A batch larger than the local block would allow is sparsified as it comes.
     if (static_cast<int>(store_.robotLinks().size()) >= kMaxLocalLandmarks) sparsify();
   }
+  book_.commit();
 }
 
 void SeifSlam::sparsify() { deactivateSurplus(false); }
@@ -212,6 +207,7 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first) {
 }
 
 void SeifSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
+  book_.check(observations, sensor);  // bad input is refused before the state changes
   const bool amortized = options_.mean == SeifOptions::Mean::Amortized;
   const bool book_order = options_.recovery == SeifOptions::Recovery::BeforeMeasurement;
   if (amortized && book_order) recoverMean();
@@ -262,7 +258,7 @@ void SeifSlam::eseifUpdate(std::span<const Observation> z, const MeasurementMode
 bool SeifSlam::exceedsActive(std::span<const Observation> z) const {
   int active = static_cast<int>(store_.robotLinks().size());
   for (std::size_t i = 0; i < z.size(); ++i) {
-    const int slot = store_.index().find(z[i].landmark);
+    const int slot = book_.find(z[i].landmark);
     if (slot >= 0 && store_.node(slot).active >= 0) continue;
     const bool repeated = std::any_of(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(i),
                                       [&](const Observation& o) { return o.landmark == z[i].landmark; });
@@ -282,8 +278,7 @@ bool SeifSlam::partitionObservations(std::span<const Observation> z, const Measu
   ranking_.clear();
   roles_.assign(z.size(), kAlpha);
   for (std::size_t i = 0; i < z.size(); ++i) {
-    requireAssociated(z[i], "seif");
-    const int slot = store_.index().find(z[i].landmark);
+    const int slot = book_.find(z[i].landmark);
     if (slot >= 0) ranking_.emplace_back(-store_.node(slot).H.trace(), static_cast<int>(i));
   }
   std::sort(ranking_.begin(), ranking_.end());
@@ -295,10 +290,10 @@ bool SeifSlam::partitionObservations(std::span<const Observation> z, const Measu
   for (const auto& [score, i] : ranking_) {
     if ((found && beta_.size() >= target) || beta_.size() == max_beta) break;
     const Observation& o = z[static_cast<std::size_t>(i)];
-    const int slot = store_.index().find(o.landmark);
+    const int slot = book_.find(o.landmark);
     if (std::find(beta_slots_.begin(), beta_slots_.end(), slot) != beta_slots_.end()) continue;
     const Mat2 Z_inv = sensor.noise(o).inverse();
-    if (gate_.rejects(sensor, x, store_.node(slot).mu, o, Z_inv)) {
+    if (book_.rejects(sensor, x, store_.node(slot).mu, o)) {
       roles_[static_cast<std::size_t>(i)] = kRejected;
       continue;
     }
@@ -390,7 +385,7 @@ Eigen::MatrixXd SeifSlam::covariance() const {
 
 Pose2 SeifSlam::pose() const { return wrapHeading(Pose2(store_.robotMean())); }
 
-Vec2 SeifSlam::landmark(int id) const { return store_.node(store_.index().require(id, "seif")).mu; }
+Vec2 SeifSlam::landmark(int id) const { return store_.node(book_.require(id)).mu; }
 
 // The marginals are read off the selected inverse of the cached factor (SparseMarginals):
 // H stores every robot and landmark diagonal block in full, so each lies in its pattern.
@@ -400,9 +395,9 @@ Mat3 SeifSlam::poseCovariance() const {
 }
 
 Mat2 SeifSlam::landmarkCovariance(int id) const {
-  const int slot = store_.index().require(id, "seif");
+  const int slot = book_.require(id);
   if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance(slot).topLeftCorner<2, 2>();
-  return factor().covarianceBlock<2>(LandmarkIndex::stateIndex(slot));
+  return factor().covarianceBlock<2>(StateLayout::landmark(slot));
 }
 
 Eigen::MatrixXd SeifSlam::localCovariance(int slot) const {
@@ -452,7 +447,7 @@ Eigen::MatrixXd SeifSlam::localCovariance(int slot) const {
 }
 
 Eigen::Matrix<double, Eigen::Dynamic, 2> SeifSlam::landmarkCovarianceColumns(int id) const {
-  const int i = LandmarkIndex::stateIndex(store_.index().require(id, "seif"));
+  const int i = StateLayout::landmark(book_.require(id));
   // Two solves with the cached factor: H Sigma_{:,i} = e_i.
   Eigen::VectorXd e = Eigen::VectorXd::Zero(3 + 2 * store_.size());
   Eigen::Matrix<double, Eigen::Dynamic, 2> cols(e.size(), 2);
@@ -466,8 +461,8 @@ Eigen::Matrix<double, Eigen::Dynamic, 2> SeifSlam::landmarkCovarianceColumns(int
 
 PredictedMeasurement SeifSlam::predictMeasurement(int id, const MeasurementModel& sensor,
                                                  const Mat2& R) const {
-  const int slot = store_.index().require(id, "seif");
-  const int i = LandmarkIndex::stateIndex(slot);
+  const int slot = book_.require(id);
+  const int i = StateLayout::landmark(slot);
   // The landmark's columns of Sigma give its block and its cross-covariance with the pose.
   const Eigen::Matrix<double, Eigen::Dynamic, 2> cols = landmarkCovarianceColumns(id);
   return innovation(sensor, store_.robotMean(), store_.node(slot).mu, poseCovariance(),
@@ -476,7 +471,7 @@ PredictedMeasurement SeifSlam::predictMeasurement(int id, const MeasurementModel
 
 std::vector<int> SeifSlam::activeLandmarks() const {
   std::vector<int> ids;
-  for (const SeifStore::RobotLink& l : store_.robotLinks()) ids.push_back(store_.index().ids()[static_cast<std::size_t>(l.slot)]);
+  for (const SeifStore::RobotLink& l : store_.robotLinks()) ids.push_back(book_.ids()[static_cast<std::size_t>(l.slot)]);
   return ids;
 }
 

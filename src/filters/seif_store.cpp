@@ -41,7 +41,8 @@ void SeifStore::addToLink(int a, int c, const Mat2& H_ac) {
 }
 
 int SeifStore::addLandmark(int id, const Vec2& mu) {
-  const int slot = index_.add(id);
+  const int slot = size();
+  ids_.push_back(id);
   nodes_.emplace_back();
   nodes_.back().mu = mu;
   return slot;
@@ -86,7 +87,7 @@ void SeifStore::detachRobot(const Vec3& mu_x) {
 
 void SeifStore::setMean(const Eigen::VectorXd& mu) {
   mu_x_ = mu.head<3>();
-  for (int s = 0; s < size(); ++s) nodes_[static_cast<std::size_t>(s)].mu = mu.segment<2>(LandmarkIndex::stateIndex(s));
+  for (int s = 0; s < size(); ++s) nodes_[static_cast<std::size_t>(s)].mu = mu.segment<2>(StateLayout::landmark(s));
 }
 
 // ---------------------------------------------------------------- the local block ------
@@ -105,7 +106,7 @@ void SeifStore::gatherActive() {
 void SeifStore::gatherListed() {
   const int k = static_cast<int>(gathered_.size());
   if (k > kMaxLocalLandmarks) {
-    throw std::invalid_argument("seif: a local block holds at most " + std::to_string(kMaxLocalLandmarks) +
+    throw InvalidArgument("seif: a local block holds at most " + std::to_string(kMaxLocalLandmarks) +
                                 " landmarks");
   }
   const int n = 3 + 2 * k;
@@ -190,7 +191,7 @@ void SeifStore::relaxLandmark(int slot) {
   Eigen::LLT<Mat2> llt(node.H);
   if (llt.info() != Eigen::Success) {
     std::ostringstream msg;
-    msg << "seif: information of landmark " << index_.ids()[static_cast<std::size_t>(slot)]
+    msg << "seif: information of landmark " << ids_[static_cast<std::size_t>(slot)]
         << " is not positive definite at step " << step_;
     throw NumericError(msg.str());
   }
@@ -247,15 +248,15 @@ Eigen::SparseMatrix<double> SeifStore::sparseInformation() const {
   };
   addBlock(0, 0, H_xx_);
   for (const RobotLink& l : robot_links_) {
-    const int c = LandmarkIndex::stateIndex(l.slot);
+    const int c = StateLayout::landmark(l.slot);
     addBlock(0, c, l.H);
     addBlock(c, 0, Mat23(l.H.transpose()));
   }
   for (int s = 0; s < size(); ++s) {
     const Node& n_s = node(s);
-    const int r = LandmarkIndex::stateIndex(s);
+    const int r = StateLayout::landmark(s);
     addBlock(r, r, n_s.H);
-    for (const Link& l : n_s.links) addBlock(r, LandmarkIndex::stateIndex(l.slot), l.H);
+    for (const Link& l : n_s.links) addBlock(r, StateLayout::landmark(l.slot), l.H);
   }
   Eigen::SparseMatrix<double> H(n, n);
   H.setFromTriplets(t.begin(), t.end());
@@ -273,8 +274,8 @@ Eigen::SparseMatrix<double> SeifStore::lowerInformation() const {
   for (int s = 0; s < static_cast<int>(nodes_.size()); ++s) {
     int below = 0;
     for (const Link& l : nodes_[static_cast<std::size_t>(s)].links) below += l.slot > s ? 2 : 0;
-    count[static_cast<std::size_t>(LandmarkIndex::stateIndex(s))] = 2 + below;
-    count[static_cast<std::size_t>(LandmarkIndex::stateIndex(s)) + 1] = 1 + below;
+    count[static_cast<std::size_t>(StateLayout::landmark(s))] = 2 + below;
+    count[static_cast<std::size_t>(StateLayout::landmark(s)) + 1] = 1 + below;
   }
   Eigen::SparseMatrix<double> H(n, n);
   H.reserve(Eigen::Map<const Eigen::VectorXi>(count.data(), n));
@@ -284,7 +285,7 @@ Eigen::SparseMatrix<double> SeifStore::lowerInformation() const {
   }
   // Robot columns: rows of the active landmarks in any order (insert() keeps them sorted).
   for (const RobotLink& l : robot_links_) {
-    const int r = LandmarkIndex::stateIndex(l.slot);
+    const int r = StateLayout::landmark(l.slot);
     for (int c = 0; c < 3; ++c) {
       H.insert(r, c) = l.H(c, 0);
       H.insert(r + 1, c) = l.H(c, 1);
@@ -292,7 +293,7 @@ Eigen::SparseMatrix<double> SeifStore::lowerInformation() const {
   }
   for (int s = 0; s < static_cast<int>(nodes_.size()); ++s) {
     const Node& node = nodes_[static_cast<std::size_t>(s)];
-    const int c = LandmarkIndex::stateIndex(s);
+    const int c = StateLayout::landmark(s);
     below.clear();
     for (const Link& l : node.links) {
       if (l.slot > s) below.emplace_back(l.slot, &l.H);
@@ -301,7 +302,7 @@ Eigen::SparseMatrix<double> SeifStore::lowerInformation() const {
     for (int k = 0; k < 2; ++k) {
       for (int r = k; r < 2; ++r) H.insert(c + r, c + k) = node.H(r, k);
       for (const auto& [slot, block] : below) {
-        const int r = LandmarkIndex::stateIndex(slot);
+        const int r = StateLayout::landmark(slot);
         H.insert(r, c + k) = (*block)(k, 0);  // H_{other, this} = H_{this, other}^T
         H.insert(r + 1, c + k) = (*block)(k, 1);
       }
@@ -314,14 +315,14 @@ Eigen::SparseMatrix<double> SeifStore::lowerInformation() const {
 Eigen::VectorXd SeifStore::informationVector() const {
   Eigen::VectorXd b(3 + 2 * size());
   b.head<3>() = b_x_;
-  for (int s = 0; s < size(); ++s) b.segment<2>(LandmarkIndex::stateIndex(s)) = node(s).b;
+  for (int s = 0; s < size(); ++s) b.segment<2>(StateLayout::landmark(s)) = node(s).b;
   return b;
 }
 
 Eigen::VectorXd SeifStore::mean() const {
   Eigen::VectorXd mu(3 + 2 * size());
   mu.head<3>() = mu_x_;
-  for (int s = 0; s < size(); ++s) mu.segment<2>(LandmarkIndex::stateIndex(s)) = node(s).mu;
+  for (int s = 0; s < size(); ++s) mu.segment<2>(StateLayout::landmark(s)) = node(s).mu;
   return mu;
 }
 

@@ -12,7 +12,7 @@ namespace seif {
 Linearization parseLinearization(std::string_view s) {
   if (s == "standard") return Linearization::Standard;
   if (s == "fej") return Linearization::FirstEstimates;
-  throw std::invalid_argument("unknown linearization '" + std::string(s) + "' (expected standard or fej)");
+  throw InvalidArgument("unknown linearization '" + std::string(s) + "' (expected standard or fej)");
 }
 
 std::string_view linearizationName(Linearization l) {

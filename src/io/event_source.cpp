@@ -1,4 +1,5 @@
 // Format names and the noise rule shared by the readers (include/seif/io/event_source.hpp).
+#include <seif/core/errors.hpp>
 #include <seif/io/event_source.hpp>
 
 #include <cmath>
@@ -19,7 +20,7 @@ DatasetFormat parseDatasetFormat(std::string_view name) {
   for (const auto& [format, n] : kFormats) {
     if (n == name) return format;
   }
-  throw std::invalid_argument("unknown dataset format '" + std::string(name) +
+  throw InvalidArgument("unknown dataset format '" + std::string(name) +
                               "' (expected auto, mrclam, victoria-park, isam or g2o)");
 }
 
@@ -37,7 +38,7 @@ void checkNoiseNames(const DatasetOptions& options, const std::vector<std::strin
     if (found) continue;
     std::string list;
     for (const std::string& k : known) list.append(list.empty() ? "" : ", ").append(k);
-    throw std::invalid_argument("the " + std::string(format) + " format has no noise value '" + name + "'" +
+    throw InvalidArgument("the " + std::string(format) + " format has no noise value '" + name + "'" +
                                 (known.empty() ? std::string(" (its noise comes from the file)")
                                                : " (it takes " + list + ")"));
   }
@@ -57,7 +58,7 @@ double resolveNoise(DatasetInfo& info, const DatasetOptions& options, const std:
   if (!std::isfinite(s.value) || !(s.value > 0.0)) {
     std::ostringstream msg;
     msg << name << " must be finite and > 0, found " << s.value << " (" << s.source << ")";
-    throw std::invalid_argument(msg.str());
+    throw InvalidArgument(msg.str());
   }
   info.noise.push_back(s);
   return s.value;

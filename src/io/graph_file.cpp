@@ -78,7 +78,7 @@ class GraphSource final : public EventSource {
       : format_(format), table_(std::move(table)), bytes_(bytes) {
     const char* name = format == GraphFormat::Isam ? "isam" : "g2o";
     checkNoiseNames(options, {}, name);
-    if (options.noise_form) throw std::invalid_argument(std::string("the ") + name + " format has no noise form: its records carry covariances");
+    if (options.noise_form) throw InvalidArgument(std::string("the ") + name + " format has no noise form: its records carry covariances");
     info_.source = table_.name();
     info_.format = name;
     info_.motion = std::make_shared<OdometryModel>();

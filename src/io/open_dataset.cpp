@@ -33,7 +33,7 @@ std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path, Data
     case DatasetFormat::G2o: return openG2o(path, options);
     case DatasetFormat::Auto: break;
   }
-  throw std::invalid_argument("openDataset: no reader for this format");
+  throw InvalidArgument("openDataset: no reader for this format");
 }
 
 void convertDataset(const std::filesystem::path& in, DatasetFormat in_format, const std::filesystem::path& out,

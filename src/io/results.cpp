@@ -23,7 +23,7 @@ void writeTum(const std::filesystem::path& file, const std::vector<TimedPose>& t
 void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory,
                                const std::vector<Mat3>& covariances) {
   if (trajectory.size() != covariances.size()) {
-    throw std::invalid_argument("writeTrajectoryCovariance: " + std::to_string(trajectory.size()) + " poses but " +
+    throw InvalidArgument("writeTrajectoryCovariance: " + std::to_string(trajectory.size()) + " poses but " +
                                 std::to_string(covariances.size()) + " covariances");
   }
   AtomicFile f(file);

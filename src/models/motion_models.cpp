@@ -41,7 +41,7 @@ Pose2 MotionModel::apply(const Pose2& x, const MotionInput& u) const {
 NoiseForm parseNoiseForm(std::string_view s) {
   if (s == "per-step") return NoiseForm::PerStep;
   if (s == "rate") return NoiseForm::Rate;
-  throw std::invalid_argument("unknown noise form '" + std::string(s) + "' (expected per-step or rate)");
+  throw InvalidArgument("unknown noise form '" + std::string(s) + "' (expected per-step or rate)");
 }
 
 std::string_view noiseFormName(NoiseForm form) { return form == NoiseForm::Rate ? "rate" : "per-step"; }

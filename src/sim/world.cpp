@@ -1,6 +1,7 @@
 // The simulator (docs/simulator.md). Order of the random draws, fixed: all landmarks
 // (x then y, by subject), then per step k: the control noise (e_v, e_w), then for each
 // detection in subject order the measurement noise (e_range, e_bearing).
+#include <seif/core/errors.hpp>
 #include <seif/sim/world.hpp>
 
 #include <seif/core/angles.hpp>
@@ -110,11 +111,11 @@ World makeWorld(const WorldConfig& c) {
               sim::PathBuilder(Pose2(0.0, 0.0, 0.0)).line(length).build(false)};
     }
   }
-  throw std::invalid_argument("invalid simulator config: unknown world preset");
+  throw InvalidArgument("invalid simulator config: unknown world preset");
 }
 
 void require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument("invalid simulator config: " + what);
+  if (!ok) throw InvalidArgument("invalid simulator config: " + what);
 }
 
 template <typename T>
@@ -183,7 +184,7 @@ WorldPreset parseWorldPreset(std::string_view name) {
   if (name == "paper") return WorldPreset::Paper;
   if (name == "uniform") return WorldPreset::Uniform;
   if (name == "corridor") return WorldPreset::Corridor;
-  throw std::invalid_argument("unknown world \"" + std::string(name) +
+  throw InvalidArgument("unknown world \"" + std::string(name) +
                               "\": valid worlds are paper, uniform, corridor");
 }
 
@@ -199,7 +200,7 @@ std::string_view worldPresetName(WorldPreset preset) {
 PaperPath parsePaperPath(std::string_view name) {
   if (name == "lawnmower") return PaperPath::Lawnmower;
   if (name == "lissajous") return PaperPath::Lissajous;
-  throw std::invalid_argument("unknown paper path \"" + std::string(name) +
+  throw InvalidArgument("unknown paper path \"" + std::string(name) +
                               "\": valid paths are lawnmower, lissajous");
 }
 

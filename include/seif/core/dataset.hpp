@@ -121,7 +121,7 @@ Dataset buildDataset(const RobotLog& log);
 
 /// The ground-truth pose at time t, interpolated linearly (heading along the shortest
 /// arc, result wrapped to (-pi, pi]); clamps outside the recorded span. Requires a
-/// non-empty, time-sorted track (throws std::invalid_argument when empty).
+/// non-empty, time-sorted track (throws InvalidArgument when empty).
 Pose2 interpolatePose(const std::vector<TimedPose>& track, double t);
 
 }  // namespace seif

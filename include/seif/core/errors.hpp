@@ -1,6 +1,8 @@
 #pragma once
-// Two tiers of errors (docs/conventions.md): programmer errors are asserts; bad data
-// throws one of these typed exceptions, which the CLI turns into one line and exit 2.
+// Two tiers of errors (docs/conventions.md): programmer errors are asserts; everything a
+// caller can cause throws one of these typed exceptions, all under seif::Error, each saying
+// what went wrong and where. The CLI turns DataError and NumericError into one line and
+// exit 2, InvalidArgument into exit 1; Python raises them as seif.Error subclasses.
 #include <cstddef>
 #include <stdexcept>
 #include <string>
@@ -8,14 +10,20 @@
 
 namespace seif {
 
+/// The base of every error seif throws: catch (const seif::Error&) catches them all.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// Malformed input: names the file and line, formatted "file:line: what is wrong".
 /// The message is printable whatever bytes the input held: control characters (NUL
 /// included), DEL, C1 controls and bytes that are not valid UTF-8 appear as \xNN
 /// (what() is a C string: a raw NUL would cut it). file() is the name as given.
-class DataError : public std::runtime_error {
+class DataError : public Error {
  public:
   DataError(const std::string& file, long line, const std::string& what)
-      : std::runtime_error(format(file, line, what)), file_(file), line_(line) {}
+      : Error(format(file, line, what)), file_(file), line_(line) {}
   const std::string& file() const { return file_; }
   long line() const { return line_; }
 
@@ -82,16 +90,37 @@ class DataError : public std::runtime_error {
 };
 
 /// A numerical failure inside a filter (singular innovation, indefinite information),
-/// naming the step and the landmark when known.
-class NumericError : public std::runtime_error {
+/// naming the filter, the step and the landmark when known.
+class NumericError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  using Error::Error;
 };
 
-/// An invalid argument to a model or a filter (e.g. a zero-range measurement inversion).
-class ModelError : public std::invalid_argument {
+/// A bad argument: an option out of range, an unknown name, a model asked the impossible
+/// (a zero-range measurement inversion), an observation without a landmark id where the
+/// filter needs known association. The message names the option or the observation.
+class InvalidArgument : public Error {
  public:
-  using std::invalid_argument::invalid_argument;
+  using Error::Error;
+};
+
+/// What a model or filter cannot do with the data it was given (inverting a zero range, an
+/// observation without a landmark id where association is known): bad data more than a bad
+/// option, so the CLI exits 2 for it.
+class ModelError : public InvalidArgument {
+ public:
+  using InvalidArgument::InvalidArgument;
+};
+
+/// A landmark id that is not in the map.
+class UnknownLandmark : public Error {
+ public:
+  UnknownLandmark(const std::string& filter, int id)
+      : Error(filter + ": landmark " + std::to_string(id) + " is not in the map"), id_(id) {}
+  int id() const { return id_; }
+
+ private:
+  int id_;
 };
 
 }  // namespace seif

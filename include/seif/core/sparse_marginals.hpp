@@ -41,7 +41,7 @@ class SparseMarginals {
   /// block H stores in full. Computes (T1, T2) the columns of the selected inverse on the
   /// path from the entry's column to the root of the elimination tree, unless an earlier
   /// read did: reading every marginal costs one full pass, a single one only its path; an
-  /// entry already computed costs a binary search. Throws std::out_of_range for an entry not
+  /// entry already computed costs a binary search. Throws InvalidArgument for an entry not
   /// in the pattern.
   double covariance(Eigen::Index i, Eigen::Index j) const;
 

@@ -65,7 +65,7 @@ struct ConsistencyResult {
 
 /// Runs the study. `progress(done, total)` counts runs and is called from worker threads,
 /// one call at a time. Throws NumericError naming the run's seed and the filter when a
-/// filter fails, std::invalid_argument for runs < 1, samples < 1 or no filter.
+/// filter fails, InvalidArgument for runs < 1, samples < 1 or no filter.
 ConsistencyResult runConsistency(const ConsistencyOptions& options,
                                  const std::function<void(std::size_t, std::size_t)>& progress = {});
 

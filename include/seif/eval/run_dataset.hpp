@@ -53,7 +53,7 @@ struct RunReport {
 
 /// Runs `request` and writes the three files into `out` (which must exist and be writable).
 /// `progress(fraction)` is called during the run. Throws DataError for bad input,
-/// NumericError for a numerical failure, std::invalid_argument for a bad request.
+/// NumericError for a numerical failure, InvalidArgument for a bad request.
 RunReport runDataset(const RunRequest& request, const std::filesystem::path& out,
                      const std::function<void(double)>& progress = {});
 

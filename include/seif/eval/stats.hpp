@@ -27,7 +27,7 @@ double studentTCdf(double t, double dof);
 
 /// The p-quantile of Student's t with `dof` > 0 degrees of freedom, p in (0, 1): closed
 /// forms for 1 and 2 degrees of freedom, otherwise the inverse of studentTCdf() by
-/// safeguarded Newton/bisection (relative accuracy ~1e-12). Throws std::invalid_argument
+/// safeguarded Newton/bisection (relative accuracy ~1e-12). Throws InvalidArgument
 /// outside the domain.
 double studentTQuantile(double p, double dof);
 

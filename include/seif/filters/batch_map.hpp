@@ -18,8 +18,7 @@
 // Observations the outlier gate rejects (at the inner EKF's estimate, as the EKF would)
 // are left out of the batch too.
 #include <seif/filters/ekf_slam.hpp>
-#include <seif/filters/landmark_index.hpp>
-#include <seif/filters/outlier_gate.hpp>
+#include <seif/filters/landmark_book.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Core>
@@ -53,12 +52,12 @@ class BatchMap final : public SlamFilter {
   bool smoother() const override { return true; }
 
   /// Gauss-Newton from any initial guess: one pose per step plus the start, landmarks in
-  /// state order. Throws std::invalid_argument for wrong sizes, NumericError as finish().
+  /// state order. Throws InvalidArgument for wrong sizes, NumericError as finish().
   void optimizeFrom(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks);
   /// F at the solution (NaN before a solve).
   double cost() const { return cost_; }
   /// F at any point (one pose per step plus the start, landmarks in state order), and in
-  /// `violation` max |W_k^T r_k| there. Throws std::invalid_argument for wrong sizes.
+  /// `violation` max |W_k^T r_k| there. Throws InvalidArgument for wrong sizes.
   double costAt(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks,
                 double* violation = nullptr) const;
   /// Gauss-Newton iterations (KKT solves) of the last solve.
@@ -66,15 +65,15 @@ class BatchMap final : public SlamFilter {
   /// max |W_k^T r_k| at the solution: the violation of the noise-free directions.
   double constraintViolation() const { return violation_; }
   /// Marginal covariance of every pose x_0..x_T: 3 solves with the factored KKT per pose,
-  /// O(T) solves in all. Throws std::logic_error before a solve.
+  /// O(T) solves in all. Throws InvalidArgument before a solve.
   std::vector<Mat3> trajectoryCovariances() const;
 
   PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
                                           const Mat2& R) const override;
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
-  const std::vector<int>& landmarkIds() const override { return index_.ids(); }
-  bool hasLandmark(int id) const override { return index_.find(id) >= 0; }
+  const std::vector<int>& landmarkIds() const override { return book_.ids(); }
+  bool hasLandmark(int id) const override { return book_.find(id) >= 0; }
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
   /// The structure of the smoothing information matrix over all poses and landmarks:
@@ -85,7 +84,7 @@ class BatchMap final : public SlamFilter {
   std::size_t robotLinks() const override { return last_pose_links_; }
   /// 0: the batch touches no information block per step (its inner EKF does).
   std::size_t blocksTouched() const override { return 0; }
-  std::size_t rejectedObservations() const override { return gate_.rejected(); }
+  std::size_t rejectedObservations() const override { return book_.rejected(); }
 
   /// [x_T, landmarks]. The covariance is the joint marginal: 3 + 2N solves with the factored
   /// KKT, once per solution (cached); the information is its inverse, O(N^3).
@@ -116,8 +115,7 @@ class BatchMap final : public SlamFilter {
   FilterConfig config_;
   Pose2 start_;
   EkfSlam inner_;
-  OutlierGate gate_;
-  LandmarkIndex index_;
+  LandmarkBook book_;
   std::vector<MotionInput> inputs_;      // u_k moves x_k to x_{k+1}
   std::vector<Measurement> measurements_;
   std::vector<Pose2> guess_;             // the inner EKF's pose after every step (x_0 first)

@@ -3,9 +3,7 @@
 // vector b (algorithm.md "The exact information filter"). Motion update in the closed
 // form of paper Lemma 3 on the full matrix, measurement update paper eq. (21-22), and the
 // mean recovered exactly by a Cholesky solve of H mu = b. Algebraically the EKF.
-#include <seif/filters/first_estimates.hpp>
-#include <seif/filters/landmark_index.hpp>
-#include <seif/filters/outlier_gate.hpp>
+#include <seif/filters/landmark_book.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Cholesky>
@@ -28,13 +26,13 @@ class EifSlam final : public SlamFilter {
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
-  const std::vector<int>& landmarkIds() const override { return index_.ids(); }
-  bool hasLandmark(int id) const override { return index_.find(id) >= 0; }
+  const std::vector<int>& landmarkIds() const override { return book_.ids(); }
+  bool hasLandmark(int id) const override { return book_.find(id) >= 0; }
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
   FilterStats stats() const override;
   std::size_t robotLinks() const override;
-  std::size_t rejectedObservations() const override { return gate_.rejected(); }
+  std::size_t rejectedObservations() const override { return book_.rejected(); }
   std::size_t blocksTouched() const override {
     return (landmarkIds().size() + 1) * (landmarkIds().size() + 1);
   }
@@ -49,12 +47,11 @@ class EifSlam final : public SlamFilter {
 
  private:
   void recoverMean();
+  void applyPlan(std::span<const PlannedObservation> plan, const MeasurementModel& sensor);
   const Eigen::LLT<Eigen::MatrixXd>& factor() const;
 
   FilterConfig config_;
-  OutlierGate gate_;
-  LandmarkIndex index_;
-  std::optional<FirstEstimates> fej_;  // with Linearization::FirstEstimates
+  LandmarkBook book_;
   Eigen::MatrixXd H_;
   Eigen::VectorXd b_;
   Eigen::VectorXd mu_;

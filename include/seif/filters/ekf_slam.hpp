@@ -3,9 +3,7 @@
 // update). New landmarks are initialised through the inverse-model Jacobians, and all
 // observations of one instant are applied jointly at one linearisation point, so that the
 // EKF and the EIF give the same posterior to rounding (algorithm.md "Models", "EIF").
-#include <seif/filters/first_estimates.hpp>
-#include <seif/filters/landmark_index.hpp>
-#include <seif/filters/outlier_gate.hpp>
+#include <seif/filters/landmark_book.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Core>
@@ -27,16 +25,16 @@ class EkfSlam final : public SlamFilter {
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override { return sigma_.topLeftCorner<3, 3>(); }
-  const std::vector<int>& landmarkIds() const override { return index_.ids(); }
-  bool hasLandmark(int id) const override { return index_.find(id) >= 0; }
+  const std::vector<int>& landmarkIds() const override { return book_.ids(); }
+  bool hasLandmark(int id) const override { return book_.find(id) >= 0; }
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
   Eigen::Matrix<double, Eigen::Dynamic, 2> landmarkCovarianceColumns(int id) const override {
-    return sigma_.middleCols<2>(LandmarkIndex::stateIndex(index_.require(id, "ekf")));
+    return sigma_.middleCols<2>(StateLayout::landmark(book_.require(id)));
   }
   FilterStats stats() const override;
   std::size_t robotLinks() const override { return landmarkIds().size(); }  // Sigma^-1 is dense
-  std::size_t rejectedObservations() const override { return gate_.rejected(); }
+  std::size_t rejectedObservations() const override { return book_.rejected(); }
   std::size_t blocksTouched() const override {
     return (landmarkIds().size() + 1) * (landmarkIds().size() + 1);
   }
@@ -50,11 +48,10 @@ class EkfSlam final : public SlamFilter {
 
  private:
   void addLandmark(const Observation& z, const MeasurementModel& sensor);
+  void applyPlan(std::span<const PlannedObservation> plan, const MeasurementModel& sensor);
 
   FilterConfig config_;
-  OutlierGate gate_;
-  LandmarkIndex index_;
-  std::optional<FirstEstimates> fej_;  // with Linearization::FirstEstimates
+  LandmarkBook book_;
   Eigen::VectorXd mu_;     // heading kept unwrapped in the state; pose() wraps it
   Eigen::MatrixXd sigma_;
 };

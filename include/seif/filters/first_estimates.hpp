@@ -33,6 +33,11 @@ class FirstEstimates {
   /// evaluated (the FEJ-EKF's measurement Jacobian).
   const Vec2& landmark(int slot) const { return landmarks_[static_cast<std::size_t>(slot)]; }
   int size() const { return static_cast<int>(landmarks_.size()); }
+  /// Removes slot `slot`; the last takes its place (LandmarkBook::removeSlot).
+  void removeSlot(int slot) {
+    landmarks_[static_cast<std::size_t>(slot)] = landmarks_.back();
+    landmarks_.pop_back();
+  }
 
  private:
   Vec2 predicted_;

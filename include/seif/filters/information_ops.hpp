@@ -14,7 +14,8 @@ namespace seif {
 ///   Phi = G^-T H G^-1,  kappa = Phi S_x (U^-1 + S_x^T Phi S_x)^-1 S_x^T Phi,
 ///   H <- Phi - kappa,   b <- b + (Hbar - H) mu + Hbar S_x delta,   mu <- mu + S_x delta.
 /// (U^-1 + A)^-1 is evaluated as U (I + A U)^-1, so a singular U (the two-dimensional
-/// velocity noise) is fine. Exact when H holds every variable linked to the robot.
+/// velocity noise) is fine. G = I + J_delta_x is any invertible 3x3 Jacobian (NumericError
+/// when singular). Exact when H holds every variable linked to the robot.
 /// The paper's b update assumes mu = H^-1 b; here the residual b - H mu of the robot's row
 /// is carried through the motion too, so the result is exact (for the model linearised at
 /// mu) whatever mean is supplied - the SEIF's amortised mean is not exact.

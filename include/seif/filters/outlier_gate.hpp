@@ -27,6 +27,10 @@ class OutlierGate {
   /// counts it if so). Z_inv is the inverse of the observation's noise.
   bool rejects(const MeasurementModel& sensor, const Pose2& x, const Vec2& y, const Observation& z,
                const Mat2& Z_inv);
+  /// rejects() without counting: the caller counts with count() once its update holds.
+  bool wouldReject(const MeasurementModel& sensor, const Pose2& x, const Vec2& y, const Observation& z,
+                   const Mat2& Z_inv) const;
+  void count(std::size_t rejections) { rejected_ += rejections; }
 
   std::size_t rejected() const { return rejected_; }
   double sigmas() const { return sigmas_; }

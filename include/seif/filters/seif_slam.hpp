@@ -7,9 +7,8 @@
 //   update(z)   : mean recovery (amortised coordinate descent, eq. 42), measurement update
 //                 (Lemma 1, eq. 21-22), sparsification (eq. 44-51) when more than
 //                 max_active landmarks are active.
-#include <seif/filters/first_estimates.hpp>
+#include <seif/filters/landmark_book.hpp>
 #include <seif/filters/information_ops.hpp>
-#include <seif/filters/outlier_gate.hpp>
 #include <seif/filters/seif_store.hpp>
 #include <seif/filters/slam_filter.hpp>
 
@@ -94,14 +93,14 @@ class SeifSlam final : public SlamFilter {
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
-  const std::vector<int>& landmarkIds() const override { return store_.index().ids(); }
-  bool hasLandmark(int id) const override { return store_.index().find(id) >= 0; }
+  const std::vector<int>& landmarkIds() const override { return book_.ids(); }
+  bool hasLandmark(int id) const override { return book_.find(id) >= 0; }
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
   Eigen::Matrix<double, Eigen::Dynamic, 2> landmarkCovarianceColumns(int id) const override;
   FilterStats stats() const override;
   std::size_t robotLinks() const override { return store_.robotLinks().size(); }
-  std::size_t rejectedObservations() const override { return gate_.rejected(); }
+  std::size_t rejectedObservations() const override { return book_.rejected(); }
   std::size_t blocksTouched() const override { return store_.blocksTouched(); }
 
   Eigen::VectorXd mean() const override;
@@ -168,10 +167,9 @@ class SeifSlam final : public SlamFilter {
   void invalidateFactor();
 
   FilterConfig config_;
-  OutlierGate gate_;
+  LandmarkBook book_;
   SeifOptions options_;
   SeifStore store_;
-  std::optional<FirstEstimates> fej_;  // with Linearization::FirstEstimates
   std::mt19937_64 rng_;
   std::size_t relax_cursor_ = 0;  // next landmark of a cyclic relaxation
   double last_sparsification_residual_ = 0.0;

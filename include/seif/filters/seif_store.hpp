@@ -6,7 +6,7 @@
 // landmarks, at most kMaxLocalLandmarks) and scattered back; the amortised mean relaxes one
 // variable at a time on it (eq. 42). Only new landmarks and new links allocate.
 #include <seif/filters/information_ops.hpp>
-#include <seif/filters/landmark_index.hpp>
+#include <seif/filters/landmark_book.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/SparseCore>
@@ -39,8 +39,9 @@ class SeifStore {
   SeifStore(const Mat3& H_xx, const Vec3& mu_x);
 
   // ---- reading
-  const LandmarkIndex& index() const { return index_; }
-  int size() const { return index_.size(); }
+  int size() const { return static_cast<int>(nodes_.size()); }
+  /// Landmark ids by slot (for messages; LandmarkBook maps ids to slots).
+  const std::vector<int>& ids() const { return ids_; }
   const Mat3& robotInformation() const { return H_xx_; }
   const Vec3& robotVector() const { return b_x_; }
   const Vec3& robotMean() const { return mu_x_; }
@@ -72,7 +73,7 @@ class SeifStore {
   FilterStats stats() const;
 
   // ---- writing
-  /// Adds landmark `id` (new to the index), without information, at mean mu; its slot.
+  /// Adds landmark `id` as the next slot, without information, at mean mu; its slot.
   int addLandmark(int id, const Vec2& mu);
   /// Adds one observation's information over [robot (3), landmark `slot` (2)] (eq. 21-22),
   /// linking the landmark to the robot (activating it) and marking it seen at step().
@@ -131,7 +132,7 @@ class SeifStore {
   Mat2* link(int a, int c);
   void gatherListed();  // gather() of gathered_
 
-  LandmarkIndex index_;
+  std::vector<int> ids_;
   Mat3 H_xx_;
   Vec3 b_x_;
   Vec3 mu_x_;

@@ -29,7 +29,7 @@ enum class Linearization {
   FirstEstimates,
 };
 
-/// "standard" | "fej". Throws std::invalid_argument naming the valid names.
+/// "standard" | "fej". Throws InvalidArgument naming the valid names.
 Linearization parseLinearization(std::string_view s);
 std::string_view linearizationName(Linearization l);
 

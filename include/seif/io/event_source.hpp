@@ -70,7 +70,7 @@ class EventSource {
 
 enum class DatasetFormat { Auto, Mrclam, VictoriaPark, Isam, G2o };
 
-/// "auto" | "mrclam" | "victoria-park" | "isam" | "g2o"; throws std::invalid_argument
+/// "auto" | "mrclam" | "victoria-park" | "isam" | "g2o"; throws InvalidArgument
 /// naming them.
 DatasetFormat parseDatasetFormat(std::string_view name);
 std::string_view datasetFormatName(DatasetFormat format);
@@ -83,13 +83,13 @@ std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path,
                                          const DatasetOptions& options = {});
 
 /// Resolves one noise value: the command line's (options), else the file's, else the
-/// format's default; records it in `info.noise`. Throws std::invalid_argument for a value
+/// format's default; records it in `info.noise`. Throws InvalidArgument for a value
 /// that is not finite and > 0.
 double resolveNoise(DatasetInfo& info, const DatasetOptions& options, const std::string& name,
                     const std::string& unit, std::optional<double> from_file,
                     const std::string& file_source, double default_value);
 
-/// Throws std::invalid_argument when `options.noise` names a value outside `known`.
+/// Throws InvalidArgument when `options.noise` names a value outside `known`.
 void checkNoiseNames(const DatasetOptions& options, const std::vector<std::string>& known,
                      std::string_view format);
 

@@ -16,7 +16,7 @@ namespace seif {
 
 enum class NoiseForm { PerStep, Rate };
 
-/// "per-step" | "rate"; throws std::invalid_argument otherwise.
+/// "per-step" | "rate"; throws InvalidArgument otherwise.
 NoiseForm parseNoiseForm(std::string_view s);
 std::string_view noiseFormName(NoiseForm form);
 

@@ -23,7 +23,7 @@ enum class WorldPreset {
   Corridor,  ///< a straight strip at the paper's density, driven once: the map grows steadily
 };
 
-/// "paper" | "uniform" | "corridor". Throws std::invalid_argument naming the valid names.
+/// "paper" | "uniform" | "corridor". Throws InvalidArgument naming the valid names.
 WorldPreset parseWorldPreset(std::string_view name);
 
 /// The preset's lower-case name, as parseWorldPreset() accepts it.
@@ -36,7 +36,7 @@ enum class PaperPath {
   Lissajous,  ///< 3:2 Lissajous curve crossing itself at wide angles, 1.6 laps in 500 steps
 };
 
-/// "lawnmower" | "lissajous". Throws std::invalid_argument naming the valid names.
+/// "lawnmower" | "lissajous". Throws InvalidArgument naming the valid names.
 PaperPath parsePaperPath(std::string_view name);
 
 /// The path's lower-case name, as parsePaperPath() accepts it.
@@ -91,7 +91,7 @@ struct SimStats {
   double max_tracking_error = 0.0;
 };
 
-/// Runs the simulation (docs/simulator.md). Throws std::invalid_argument for an invalid
+/// Runs the simulation (docs/simulator.md). Throws InvalidArgument for an invalid
 /// config (landmarks < 1, steps < 1, non-positive or non-finite sensor_range, dt, speed,
 /// density or corridor_width, negative or non-finite noise sigmas). Fills `stats` if given.
 RobotLog simulate(const WorldConfig& config, SimStats* stats = nullptr);
