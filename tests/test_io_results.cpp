@@ -39,8 +39,8 @@ class FailingFilter : public SlamFilter {
   using SlamFilter::update;
   void predict(const MotionIncrement& m) override { ekf_.predict(m); }
   void update(std::span<const Observation> z, const MeasurementModel& sensor) override { ekf_.update(z, sensor); }
-  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor, const Mat2& R) const override {
-    return ekf_.predictMeasurement(id, sensor, R);
+  Marginal marginal(std::span<const int> ids, bool pose, MarginalMode mode) const override {
+    return ekf_.marginal(ids, pose, mode);
   }
   Pose2 pose() const override { return ekf_.pose(); }
   Mat3 poseCovariance() const override { return ekf_.poseCovariance(); }

@@ -369,7 +369,7 @@ std::vector<Pose2> BatchMap::smoothedTrajectory() const {
   return solution_ ? solution_->poses : std::vector<Pose2>{};
 }
 
-Eigen::MatrixXd BatchMap::marginal(const std::vector<Eigen::Index>& rows) const {
+Eigen::MatrixXd BatchMap::kktMarginal(const std::vector<Eigen::Index>& rows) const {
   // Columns of the KKT inverse by solves with unit right-hand sides, 256 at a time.
   const Solution& s = solution("a marginal");
   const auto m = static_cast<Eigen::Index>(rows.size());
@@ -390,7 +390,7 @@ std::vector<Mat3> BatchMap::trajectoryCovariances() const {
   std::vector<Mat3> out;
   out.reserve(s.poses.size());
   for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(s.poses.size()); ++k) {
-    out.push_back(marginal({3 * k, 3 * k + 1, 3 * k + 2}));
+    out.push_back(kktMarginal({3 * k, 3 * k + 1, 3 * k + 2}));
   }
   return out;
 }
@@ -406,7 +406,7 @@ Mat3 BatchMap::poseCovariance() const {
   if (!solution_) return inner_.poseCovariance();
   if (solution_->covariance) return solution_->covariance->topLeftCorner<3, 3>();
   const Eigen::Index T = 3 * static_cast<Eigen::Index>(inputs_.size());
-  return marginal({T, T + 1, T + 2});
+  return kktMarginal({T, T + 1, T + 2});
 }
 
 Mat2 BatchMap::landmarkCovariance(int id) const {
@@ -414,17 +414,30 @@ Mat2 BatchMap::landmarkCovariance(int id) const {
   const int slot = book_.require(id);
   if (solution_->covariance) return solution_->covariance->block<2, 2>(3 + 2 * slot, 3 + 2 * slot);
   const Eigen::Index l = landmarkVar(slot);
-  return marginal({l, l + 1});
+  return kktMarginal({l, l + 1});
 }
 
-PredictedMeasurement BatchMap::predictMeasurement(int id, const MeasurementModel& sensor, const Mat2& R) const {
-  if (!solution_) return inner_.predictMeasurement(id, sensor, R);
-  const int slot = book_.require(id);
-  const Eigen::Index T = 3 * static_cast<Eigen::Index>(inputs_.size());
-  const Eigen::Index l = landmarkVar(slot);
-  const Eigen::MatrixXd P = marginal({T, T + 1, T + 2, l, l + 1});
-  return innovation(sensor, solution_->poses.back(), solution_->landmarks[static_cast<std::size_t>(slot)],
-                    P.topLeftCorner<3, 3>(), P.topRightCorner<3, 2>(), P.bottomRightCorner<2, 2>(), R);
+Marginal BatchMap::marginal(std::span<const int> landmarks, bool pose, MarginalMode mode) const {
+  if (!solution_) return inner_.marginal(landmarks, pose, mode);
+  std::vector<Eigen::Index> rows;
+  Marginal m;
+  m.mean.resize(static_cast<Eigen::Index>(pose ? 3 + 2 * landmarks.size() : 2 * landmarks.size()));
+  Eigen::Index r = 0;
+  if (pose) {
+    const Eigen::Index T = 3 * static_cast<Eigen::Index>(inputs_.size());
+    rows.insert(rows.end(), {T, T + 1, T + 2});
+    m.mean.head<3>() = solution_->poses.back();
+    r = 3;
+  }
+  for (int id : landmarks) {
+    const int slot = book_.require(id);
+    const Eigen::Index l = landmarkVar(slot);
+    rows.insert(rows.end(), {l, l + 1});
+    m.mean.segment<2>(r) = solution_->landmarks[static_cast<std::size_t>(slot)];
+    r += 2;
+  }
+  m.covariance = kktMarginal(rows);
+  return m;
 }
 
 FilterStats BatchMap::stats() const {
@@ -456,7 +469,7 @@ Eigen::MatrixXd BatchMap::covariance() const {
       rows.push_back(landmarkVar(s));
       rows.push_back(landmarkVar(s) + 1);
     }
-    solution_->covariance = marginal(rows);
+    solution_->covariance = kktMarginal(rows);
   }
   return *solution_->covariance;
 }

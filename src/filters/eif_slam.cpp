@@ -56,15 +56,32 @@ std::size_t EifSlam::robotLinks() const {
   return n;
 }
 
-PredictedMeasurement EifSlam::predictMeasurement(int id, const MeasurementModel& sensor,
-                                                const Mat2& R) const {
-  const int i = StateLayout::landmark(book_.require(id));
-  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(H_.rows(), 5);
-  E.topLeftCorner<3, 3>().setIdentity();
-  E.block<2, 2>(i, 3).setIdentity();
-  const Eigen::MatrixXd cols = factor().solve(E);  // Sigma's columns of the pose and landmark
-  return innovation(sensor, mu_.head<3>(), mu_.segment<2>(i), cols.topLeftCorner<3, 3>(),
-                    cols.block<3, 2>(0, 3), cols.block<2, 2>(i, 3), R);
+Marginal EifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalMode mode) const {
+  std::vector<int> slots;
+  for (int id : landmarks) slots.push_back(book_.require(id));
+  const std::vector<Eigen::Index> rows = stateIndices(slots, pose);
+  Marginal m;
+  m.mean = mu_(rows);
+  if (mode == MarginalMode::Local) {
+    std::vector<int> vars;
+    if (pose) vars.push_back(-1);
+    vars.insert(vars.end(), slots.begin(), slots.end());
+    const auto at = [](int v) { return v < 0 ? Eigen::Index(0) : StateLayout::landmark(v); };
+    const auto dim = [](int v) { return v < 0 ? Eigen::Index(3) : Eigen::Index(2); };
+    m.covariance = localMarginalCovariance(
+        vars,
+        [&](int v, std::vector<int>& out) {  // every variable with a non-zero block beside v
+          for (int c = -1; c < book_.size(); ++c) {
+            if (c != v && H_.block(at(v), at(c), dim(v), dim(c)).cwiseAbs().maxCoeff() > 0.0) out.push_back(c);
+          }
+        },
+        [&](int a, int c) { return Eigen::MatrixXd(H_.block(at(a), at(c), dim(a), dim(c))); }, "eif");
+    return m;
+  }
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(H_.rows(), static_cast<Eigen::Index>(rows.size()));
+  for (std::size_t k = 0; k < rows.size(); ++k) E(rows[k], static_cast<Eigen::Index>(k)) = 1.0;
+  m.covariance = factor().solve(E)(rows, Eigen::all);  // Sigma's columns of the variables
+  return m;
 }
 
 void EifSlam::predict(const MotionIncrement& increment) {

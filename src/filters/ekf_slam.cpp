@@ -34,11 +34,11 @@ Eigen::MatrixXd EkfSlam::information() const {
 
 FilterStats EkfSlam::stats() const { return denseLinkStats(information()); }
 
-PredictedMeasurement EkfSlam::predictMeasurement(int id, const MeasurementModel& sensor,
-                                                const Mat2& R) const {
-  const int i = StateLayout::landmark(book_.require(id));
-  return innovation(sensor, mu_.head<3>(), mu_.segment<2>(i), sigma_.topLeftCorner<3, 3>(),
-                    sigma_.block<3, 2>(0, i), sigma_.block<2, 2>(i, i), R);
+Marginal EkfSlam::marginal(std::span<const int> landmarks, bool pose, MarginalMode) const {
+  std::vector<int> slots;
+  for (int id : landmarks) slots.push_back(book_.require(id));
+  const std::vector<Eigen::Index> rows = stateIndices(slots, pose);
+  return {mu_(rows), sigma_(rows, rows)};
 }
 
 void EkfSlam::predict(const MotionIncrement& increment) {

@@ -149,6 +149,66 @@ MeasurementInformation measurementInformation(const MeasurementModel& sensor, co
   return info;
 }
 
+Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
+                                        const std::function<void(int, std::vector<int>&)>& neighbours,
+                                        const std::function<Eigen::MatrixXd(int, int)>& block,
+                                        const std::string& filter) {
+  // The blanket: robot first when in it, then the queried landmarks, then their neighbours.
+  std::vector<int> found;
+  for (int v : vars) neighbours(v, found);
+  std::vector<int> order;
+  const auto has = [&](int v) { return std::find(order.begin(), order.end(), v) != order.end(); };
+  const bool robot = std::find(vars.begin(), vars.end(), -1) != vars.end() ||
+                     std::find(found.begin(), found.end(), -1) != found.end();
+  if (robot) order.push_back(-1);
+  for (int v : vars) {
+    if (!has(v)) order.push_back(v);
+  }
+  for (int v : found) {
+    if (!has(v)) order.push_back(v);
+  }
+  const auto dim = [](int v) { return v < 0 ? Eigen::Index(3) : Eigen::Index(2); };
+  std::vector<Eigen::Index> offset(order.size() + 1, 0);
+  for (std::size_t a = 0; a < order.size(); ++a) offset[a + 1] = offset[a] + dim(order[a]);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(offset.back(), offset.back());
+  std::vector<int> linked;
+  for (std::size_t a = 0; a < order.size(); ++a) {
+    H.block(offset[a], offset[a], dim(order[a]), dim(order[a])) = block(order[a], order[a]);
+    linked.clear();
+    neighbours(order[a], linked);
+    for (std::size_t c = a + 1; c < order.size(); ++c) {
+      if (std::find(linked.begin(), linked.end(), order[c]) == linked.end()) continue;
+      const Eigen::MatrixXd B = block(order[a], order[c]);
+      H.block(offset[a], offset[c], B.rows(), B.cols()) = B;
+      H.block(offset[c], offset[a], B.cols(), B.rows()) = B.transpose();
+    }
+  }
+  const Eigen::LLT<Eigen::MatrixXd> llt(H);
+  if (llt.info() != Eigen::Success) {
+    throw NumericError(filter + ": the information of a Markov blanket is not positive definite");
+  }
+  // Only the queried variables' columns, in the order asked.
+  Eigen::Index n = 0;
+  for (int v : vars) n += dim(v);
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(H.rows(), n);
+  std::vector<Eigen::Index> at;
+  Eigen::Index col = 0;
+  for (int v : vars) {
+    const auto a = static_cast<std::size_t>(std::find(order.begin(), order.end(), v) - order.begin());
+    E.block(offset[a], col, dim(v), dim(v)).setIdentity();
+    at.push_back(offset[a]);
+    col += dim(v);
+  }
+  const Eigen::MatrixXd X = llt.solve(E);
+  Eigen::MatrixXd P(n, n);
+  Eigen::Index row = 0;
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    P.middleRows(row, dim(vars[i])) = X.middleRows(at[i], dim(vars[i]));
+    row += dim(vars[i]);
+  }
+  return P;
+}
+
 FilterStats denseLinkStats(const Eigen::MatrixXd& H) {
   FilterStats s;
   const int landmarks = static_cast<int>((H.rows() - 3) / 2);

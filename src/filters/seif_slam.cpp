@@ -390,60 +390,73 @@ Vec2 SeifSlam::landmark(int id) const { return store_.node(book_.require(id)).mu
 // The marginals are read off the selected inverse of the cached factor (SparseMarginals):
 // H stores every robot and landmark diagonal block in full, so each lies in its pattern.
 Mat3 SeifSlam::poseCovariance() const {
-  if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance(-1).topLeftCorner<3, 3>();
+  if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance({-1});
   return factor().covarianceBlock<3>(0);
 }
 
 Mat2 SeifSlam::landmarkCovariance(int id) const {
   const int slot = book_.require(id);
-  if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance(slot).topLeftCorner<2, 2>();
+  if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance({slot});
   return factor().covarianceBlock<2>(StateLayout::landmark(slot));
 }
 
-Eigen::MatrixXd SeifSlam::localCovariance(int slot) const {
-  // The blanket: the variable first, then its neighbours (robot: the active landmarks;
-  // landmark: its linked landmarks, and the robot when it is active).
-  std::vector<int> slots;
-  bool robot = slot < 0;
-  if (robot) {
-    for (const SeifStore::RobotLink& l : store_.robotLinks()) slots.push_back(l.slot);
-  } else {
-    slots.push_back(slot);
-    for (const SeifStore::Link& l : store_.node(slot).links) slots.push_back(l.slot);
-    robot = store_.node(slot).active >= 0;
-  }
-  const Eigen::Index off = robot ? 3 : 0;
-  const Eigen::Index n = off + 2 * static_cast<Eigen::Index>(slots.size());
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
-  if (robot) H.topLeftCorner<3, 3>() = store_.robotInformation();
-  for (std::size_t a = 0; a < slots.size(); ++a) {
-    const Eigen::Index i = off + 2 * static_cast<Eigen::Index>(a);
-    const SeifStore::Node& node = store_.node(slots[a]);
-    H.block<2, 2>(i, i) = node.H;
-    if (robot && node.active >= 0) {
-      const Mat32& Hxl = store_.robotLinks()[static_cast<std::size_t>(node.active)].H;
-      H.block<3, 2>(0, i) = Hxl;
-      H.block<2, 3>(i, 0) = Hxl.transpose();
+Eigen::MatrixXd SeifSlam::localCovariance(std::initializer_list<int> vars) const {
+  return localCovariance(std::span<const int>(vars.begin(), vars.size()));
+}
+
+Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars) const {
+  // The Markov blanket from the store's links: the robot's are the active landmarks; a
+  // landmark's are its linked landmarks, and the robot when it is active.
+  return localMarginalCovariance(
+      vars,
+      [&](int v, std::vector<int>& out) {
+        if (v < 0) {
+          for (const SeifStore::RobotLink& l : store_.robotLinks()) out.push_back(l.slot);
+          return;
+        }
+        if (store_.node(v).active >= 0) out.push_back(-1);
+        for (const SeifStore::Link& l : store_.node(v).links) out.push_back(l.slot);
+      },
+      [&](int a, int c) -> Eigen::MatrixXd {
+        if (a < 0 && c < 0) return store_.robotInformation();
+        if (a < 0) return store_.robotLinks()[static_cast<std::size_t>(store_.node(c).active)].H;
+        if (c < 0) return store_.robotLinks()[static_cast<std::size_t>(store_.node(a).active)].H.transpose();
+        if (a == c) return store_.node(a).H;
+        return *store_.findLink(a, c);
+      },
+      "seif (step " + std::to_string(store_.step()) + ")");
+}
+
+Marginal SeifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalMode mode) const {
+  std::vector<int> vars;
+  if (pose) vars.push_back(-1);
+  for (int id : landmarks) vars.push_back(book_.require(id));
+  Marginal m;
+  m.mean.resize(static_cast<Eigen::Index>(pose ? 3 + 2 * landmarks.size() : 2 * landmarks.size()));
+  Eigen::Index r = 0;
+  for (int v : vars) {
+    if (v < 0) {
+      m.mean.segment<3>(r) = store_.robotMean();
+      r += 3;
+    } else {
+      m.mean.segment<2>(r) = store_.node(v).mu;
+      r += 2;
     }
-    for (std::size_t c = a + 1; c < slots.size(); ++c) {
-      if (const Mat2* link = store_.findLink(slots[a], slots[c])) {
-        const Eigen::Index j = off + 2 * static_cast<Eigen::Index>(c);
-        H.block<2, 2>(i, j) = *link;
-        H.block<2, 2>(j, i) = link->transpose();
-      }
-    }
   }
-  const Eigen::LLT<Eigen::MatrixXd> llt(H);
-  if (llt.info() != Eigen::Success) {
-    throw NumericError("seif: the information of a Markov blanket is not positive definite (step " +
-                       std::to_string(store_.step()) + ")");
+  if (mode == MarginalMode::Local) {
+    m.covariance = localCovariance(vars);
+    return m;
   }
-  // The variable's block only: solve for its columns.
-  const Eigen::Index d = slot < 0 ? 3 : 2;
-  const Eigen::Index first = slot < 0 ? 0 : off;
-  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(n, d);
-  E.middleRows(first, d).setIdentity();
-  return llt.solve(E).middleRows(first, d);
+  // Exact: one solve with the cached sparse factor per column, H Sigma_{:,i} = e_i.
+  const std::vector<Eigen::Index> rows = stateIndices(std::span<const int>(vars).subspan(pose ? 1 : 0), pose);
+  m.covariance.resize(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(rows.size()));
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(StateLayout::size(store_.size()));
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    e.setZero();
+    e(rows[k]) = 1.0;
+    m.covariance.col(static_cast<Eigen::Index>(k)) = factor().solve(e)(rows);
+  }
+  return m;
 }
 
 Eigen::Matrix<double, Eigen::Dynamic, 2> SeifSlam::landmarkCovarianceColumns(int id) const {
@@ -457,16 +470,6 @@ Eigen::Matrix<double, Eigen::Dynamic, 2> SeifSlam::landmarkCovarianceColumns(int
     cols.col(c) = factor().solve(e);
   }
   return cols;
-}
-
-PredictedMeasurement SeifSlam::predictMeasurement(int id, const MeasurementModel& sensor,
-                                                 const Mat2& R) const {
-  const int slot = book_.require(id);
-  const int i = StateLayout::landmark(slot);
-  // The landmark's columns of Sigma give its block and its cross-covariance with the pose.
-  const Eigen::Matrix<double, Eigen::Dynamic, 2> cols = landmarkCovarianceColumns(id);
-  return innovation(sensor, store_.robotMean(), store_.node(slot).mu, poseCovariance(),
-                    cols.topRows<3>(), cols.middleRows<2>(i), R);
 }
 
 std::vector<int> SeifSlam::activeLandmarks() const {

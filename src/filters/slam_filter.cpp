@@ -30,28 +30,43 @@ SlamFilter::SlamFilter(const FilterConfig& config)
 Eigen::Matrix<double, Eigen::Dynamic, 2> SlamFilter::landmarkCovarianceColumns(int id) const {
   const std::vector<int>& ids = landmarkIds();
   const auto it = std::find(ids.begin(), ids.end(), id);
-  if (it == ids.end()) throw std::out_of_range(name() + ": landmark " + std::to_string(id) + " is not in the map");
+  if (it == ids.end()) throw UnknownLandmark(name(), id);
   return covariance().middleCols<2>(3 + 2 * (it - ids.begin()));
 }
 
-PredictedMeasurement SlamFilter::innovation(const MeasurementModel& sensor, const Pose2& x, const Vec2& y,
-                                            const Mat3& Sxx, const Mat32& Sxy, const Mat2& Syy,
-                                            const Mat2& R) {
-  Mat23 Jx;
-  Mat2 Jy;
+PredictedMeasurement SlamFilter::predictMeasurement(int id, const MeasurementModel& sensor, const Mat2& R,
+                                                   MarginalMode mode) const {
+  const int ids[1] = {id};
+  const Marginal m = marginal(ids, true, mode);
+  // S = J P J^T + R with J = [J_x J_y] over the joint marginal P of pose and landmark.
+  Eigen::Matrix<double, 2, 5> J;
+  Mat23 J_x;
+  Mat2 J_y;
   PredictedMeasurement p;
-  p.z = sensor.predict(x, y, &Jx, &Jy);
-  const Mat2 cross = Jx * Sxy * Jy.transpose();
-  p.S = Jx * Sxx * Jx.transpose() + cross + cross.transpose() + Jy * Syy * Jy.transpose() + R;
+  p.z = sensor.predict(m.mean.head<3>(), m.mean.tail<2>(), &J_x, &J_y);
+  J << J_x, J_y;
+  p.S = J * m.covariance * J.transpose() + R;
   p.S = (0.5 * (p.S + p.S.transpose())).eval();
   return p;
 }
 
-void SlamFilter::requireAssociated(const Observation& z, const char* filter) {
-  if (z.landmark < 0) {
-    throw ModelError(std::string(filter) + ": an observation has no landmark id (landmark " +
-                     std::to_string(z.landmark) + "); this filter needs known data association");
+std::vector<Eigen::Index> SlamFilter::stateIndices(std::span<const int> slots, bool pose) {
+  std::vector<Eigen::Index> rows;
+  rows.reserve(3 + 2 * slots.size());
+  if (pose) rows.insert(rows.end(), {0, 1, 2});
+  for (int s : slots) {
+    rows.push_back(3 + 2 * static_cast<Eigen::Index>(s));
+    rows.push_back(4 + 2 * static_cast<Eigen::Index>(s));
   }
+  return rows;
 }
+
+MarginalMode parseMarginalMode(std::string_view s) {
+  if (s == "exact") return MarginalMode::Exact;
+  if (s == "local") return MarginalMode::Local;
+  throw InvalidArgument("unknown marginal mode '" + std::string(s) + "' (expected exact or local)");
+}
+
+std::string_view marginalModeName(MarginalMode m) { return m == MarginalMode::Local ? "local" : "exact"; }
 
 }  // namespace seif

@@ -68,8 +68,8 @@ class BatchMap final : public SlamFilter {
   /// O(T) solves in all. Throws InvalidArgument before a solve.
   std::vector<Mat3> trajectoryCovariances() const;
 
-  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
-                                          const Mat2& R) const override;
+  Marginal marginal(std::span<const int> landmarks, bool pose = true,
+                    MarginalMode mode = MarginalMode::Exact) const override;
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
   const std::vector<int>& landmarkIds() const override { return book_.ids(); }
@@ -106,7 +106,7 @@ class BatchMap final : public SlamFilter {
   void linearize(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks, System& out,
                  bool system) const;
   /// Rows `rows` (variable indices) of the KKT inverse's columns `rows`: a marginal covariance.
-  Eigen::MatrixXd marginal(const std::vector<Eigen::Index>& rows) const;
+  Eigen::MatrixXd kktMarginal(const std::vector<Eigen::Index>& rows) const;
   const Solution& solution(const char* what) const;
   Eigen::Index landmarkVar(int slot) const;
   void requireSizes(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks) const;

@@ -21,8 +21,9 @@ class EifSlam final : public SlamFilter {
   using SlamFilter::update;
   void predict(const MotionIncrement& increment) override;
   void update(std::span<const Observation> observations, const MeasurementModel& sensor) override;
-  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
-                                          const Mat2& R) const override;
+  /// Exact: solves with the cached dense factor; Local: the blanket's dense inverse.
+  Marginal marginal(std::span<const int> landmarks, bool pose = true,
+                    MarginalMode mode = MarginalMode::Exact) const override;
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;

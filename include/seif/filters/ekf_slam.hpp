@@ -20,8 +20,9 @@ class EkfSlam final : public SlamFilter {
   using SlamFilter::update;
   void predict(const MotionIncrement& increment) override;
   void update(std::span<const Observation> observations, const MeasurementModel& sensor) override;
-  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
-                                          const Mat2& R) const override;
+  /// Every mode reads the covariance: O(k^2).
+  Marginal marginal(std::span<const int> landmarks, bool pose = true,
+                    MarginalMode mode = MarginalMode::Exact) const override;
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override { return sigma_.topLeftCorner<3, 3>(); }

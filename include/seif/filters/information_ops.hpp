@@ -5,7 +5,11 @@
 #include <seif/models/measurement_model.hpp>
 
 #include <Eigen/Core>
+#include <functional>
 #include <optional>
+#include <span>
+#include <string>
+#include <vector>
 
 namespace seif {
 
@@ -66,6 +70,18 @@ struct MeasurementInformation {
 MeasurementInformation measurementInformation(const MeasurementModel& sensor, const Pose2& x,
                                               const Vec2& y, const Observation& z, const Mat2& Z_inv,
                                               const std::optional<Vec2>& jacobian_landmark = std::nullopt);
+
+/// The Local marginal (SlamFilter::marginal, MarginalMode::Local): the joint covariance of
+/// `vars` (-1 the robot, else landmark slots; in that order in the result) read off the
+/// inverse of H restricted to them and their Markov blanket. `neighbours(v, out)` appends
+/// the variables linked to v; `block(a, c)` is H_{a,c} (3 or 2 rows and columns by kind;
+/// called only for linked pairs and the diagonal). The blanket is ordered robot first, then
+/// the queried landmarks, then their neighbours as found. O(b^3) for a blanket of b
+/// variables. Throws NumericError when the restricted information is not positive definite.
+Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
+                                        const std::function<void(int, std::vector<int>&)>& neighbours,
+                                        const std::function<Eigen::MatrixXd(int, int)>& block,
+                                        const std::string& filter);
 
 /// Counts the links of a dense information matrix in the state order [robot, landmarks]:
 /// non-zero off-diagonal blocks, the robot's links and the largest landmark degree.

@@ -88,8 +88,10 @@ class SeifSlam final : public SlamFilter {
   using SlamFilter::update;
   void predict(const MotionIncrement& increment) override;
   void update(std::span<const Observation> observations, const MeasurementModel& sensor) override;
-  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
-                                          const Mat2& R) const override;
+  /// Exact: one solve with the cached sparse factor per column (one factorisation per
+  /// state, O(N) at the paper's sparsity). Local: the blanket's dense inverse, O(1).
+  Marginal marginal(std::span<const int> landmarks, bool pose = true,
+                    MarginalMode mode = MarginalMode::Exact) const override;
 
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
@@ -149,8 +151,10 @@ class SeifSlam final : public SlamFilter {
   Pose2 linearizationPose() const override { return store_.robotMean(); }
 
  private:
-  /// The covariance block of `slot` (-1: the robot) from H restricted to its Markov blanket.
-  Eigen::MatrixXd localCovariance(int slot) const;
+  /// The joint covariance of `vars` (-1: the robot, else slots) from H restricted to their
+  /// Markov blanket (MarginalMode::Local).
+  Eigen::MatrixXd localCovariance(std::span<const int> vars) const;
+  Eigen::MatrixXd localCovariance(std::initializer_list<int> vars) const;
   /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).
   void deactivateSurplus(bool solve_active_mean_first);
   /// update() with Sparsify::Eseif (Walter, Eustice, Leonard 2007).

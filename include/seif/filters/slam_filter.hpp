@@ -57,6 +57,26 @@ struct FilterStats {
   std::size_t blocks_touched = 0;      ///< H blocks read or written by the last step
 };
 
+/// How a marginal is computed (SlamFilter::marginal).
+enum class MarginalMode {
+  /// The posterior's marginal.
+  Exact,
+  /// The inverse of the information restricted to the queried variables and every variable
+  /// linked to one of them (their Markov blanket): conditions on the rest, so never larger
+  /// than Exact. Constant time in the SEIF.
+  Local,
+};
+
+/// "exact" | "local". Throws InvalidArgument naming the valid names.
+MarginalMode parseMarginalMode(std::string_view s);
+std::string_view marginalModeName(MarginalMode m);
+
+/// A joint marginal: the pose (when asked) first, then the landmarks in the order asked.
+struct Marginal {
+  Eigen::VectorXd mean;
+  Eigen::MatrixXd covariance;
+};
+
 /// A landmark's predicted measurement and its innovation covariance S = J Sigma J^T + R
 /// (J over the pose and the landmark): what a data-association test needs.
 struct PredictedMeasurement {
@@ -103,13 +123,27 @@ class SlamFilter {
   const MotionModel& motionModel() const { return *motion_; }
   const MeasurementModel& sensorModel() const { return *sensor_; }
 
+  /// The marginal of the pose (when `pose`) and of `landmarks` (ids), in that order: their
+  /// mean and joint covariance, computed as `mode` says. Costs, with N landmarks:
+  ///   EKF   any mode: a read of its covariance, O(k^2) for k variables.
+  ///   EIF   Exact: solves with its cached dense factor, O(N^2) per variable (one O(N^3)
+  ///         factorisation per state). Local: a dense inverse of the blanket, O(b^3).
+  ///   SEIF  Exact: solves with its cached sparse factor, O(nnz(L)) per column (one sparse
+  ///         factorisation per state). Local: O(b^3), b the size of the blanket: constant
+  ///         time at the SEIF's bounded degrees.
+  ///   batch Exact (Local is Exact): solves with the KKT factor after finish(); before it
+  ///         the initial guess's (an EKF's).
+  /// Local conditions on everything outside the queried variables' Markov blanket, so it is
+  /// never larger than the marginal (overconfident: for display, not for gating).
+  /// Throws UnknownLandmark for an id not in the map.
+  virtual Marginal marginal(std::span<const int> landmarks, bool pose = true,
+                            MarginalMode mode = MarginalMode::Exact) const = 0;
+
   /// The measurement `sensor` would predict for landmark `id` at the current estimate, and
-  /// its innovation covariance with measurement noise R. EKF: O(1) reads of its covariance;
-  /// EIF: one solve with its dense factor; SEIF: exact, two solves with the sparse factor
-  /// (O(N) once per state; constant-time local forms come with covariance recovery).
-  /// Throws std::out_of_range for an id not in the map.
-  virtual PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor,
-                                                  const Mat2& R) const = 0;
+  /// its innovation covariance S = J Sigma J^T + R over the joint marginal of the pose and the
+  /// landmark (marginal(), with its cost). Throws UnknownLandmark for an id not in the map.
+  PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor, const Mat2& R,
+                                          MarginalMode mode = MarginalMode::Exact) const;
 
   virtual Pose2 pose() const = 0;
   /// Marginal covariances. EKF: read off its covariance, O(1). EIF: a solve with its cached
@@ -146,12 +180,8 @@ class SlamFilter {
  protected:
   /// The pose the convenience predict() linearises at (the filter's own, unwrapped).
   virtual Pose2 linearizationPose() const { return pose(); }
-  /// S = J_x Sxx J_x^T + J_x Sxy J_y^T + (..)^T + J_y Syy J_y^T + R, and zhat.
-  static PredictedMeasurement innovation(const MeasurementModel& sensor, const Pose2& x,
-                                         const Vec2& y, const Mat3& Sxx, const Mat32& Sxy,
-                                         const Mat2& Syy, const Mat2& R);
-  /// Throws ModelError for an observation without a landmark id (known association only).
-  static void requireAssociated(const Observation& z, const char* filter);
+  /// Indices into the state vector of the pose (when `pose`) and of the landmark slots.
+  static std::vector<Eigen::Index> stateIndices(std::span<const int> slots, bool pose);
 
  private:
   std::shared_ptr<const MotionModel> motion_;
