@@ -13,27 +13,25 @@ import pytest
 import seif
 
 
-def _env_path(name):
+def _env_path(name, exists, what):
+    """The path in environment variable `name`, or a skip saying why there is none."""
     value = os.environ.get(name)
-    return pathlib.Path(value) if value else None
+    path = pathlib.Path(value) if value else None
+    if path is None or not exists(path):
+        pytest.skip(f"{name} does not name {what} (run through ctest, or set it)")
+    return path
 
 
 @pytest.fixture(scope="session")
 def cli():
     """Path of the `seif` executable (SEIF_CLI)."""
-    path = _env_path("SEIF_CLI")
-    if path is None or not path.exists():
-        pytest.skip("SEIF_CLI does not name the seif executable (run through ctest, or set it)")
-    return path
+    return _env_path("SEIF_CLI", pathlib.Path.is_file, "the seif executable")
 
 
 @pytest.fixture(scope="session")
 def shared_data():
     """The shared data folder (SEIF_SHARED_DATA_DIR)."""
-    path = _env_path("SEIF_SHARED_DATA_DIR")
-    if path is None or not path.is_dir():
-        pytest.skip("SEIF_SHARED_DATA_DIR is not set or not a folder: no shared data")
-    return path
+    return _env_path("SEIF_SHARED_DATA_DIR", pathlib.Path.is_dir, "the shared data folder")
 
 
 @pytest.fixture(scope="session")
@@ -46,10 +44,9 @@ def victoria_park_isam(shared_data):
 
 @pytest.fixture(scope="session")
 def source_dir():
-    path = _env_path("SEIF_SOURCE_DIR")
-    if path is None:
-        path = pathlib.Path(__file__).resolve().parents[2]
-    return path
+    """The source tree: SEIF_SOURCE_DIR, else the one holding this file."""
+    value = os.environ.get("SEIF_SOURCE_DIR")
+    return pathlib.Path(value) if value else pathlib.Path(__file__).resolve().parents[2]
 
 
 def run_cli(cli, *args, check=True):
