@@ -28,15 +28,13 @@ void bindEval(py::module_& m);        // eval.cpp: run loop, metrics, experiment
 /// converted from, the library's lower-case name ("per-step", "fej", ...): every argument
 /// of that type takes either form. `parse` throws std::invalid_argument for a bad name.
 template <typename E, typename Parse, typename Name>
-py::enum_<E> bindNamedEnum(py::module_& m, py::handle scope, const char* name, const char* doc,
-                           Parse parse, Name to_name) {
+py::enum_<E> bindNamedEnum(py::handle scope, const char* name, const char* doc, Parse parse, Name to_name) {
   py::enum_<E> e(scope, name, doc);
   e.def(py::init([parse](const std::string& s) { return parse(s); }), py::arg("name"),
         "The value named by the library's string (e.g. as the CLI takes it).");
   e.def_property_readonly("text", [to_name](E v) { return std::string(to_name(v)); },
                           "The library's name of the value.");
   py::implicitly_convertible<py::str, E>();
-  (void)m;
   return e;
 }
 

@@ -84,7 +84,7 @@ void bindCore(py::module_& m) {
       .def_readwrite("U", &MotionIncrement::U)
       .def("__repr__", [](py::handle s) { return reprOf(s, {"delta", "J_delta_x", "U"}); });
 
-  bindNamedEnum<NoiseForm>(m, m, "NoiseForm",
+  bindNamedEnum<NoiseForm>(m, "NoiseForm",
                            "Form of a rate-driven model's noise: PerStep (the paper's, per control step) or "
                            "Rate (noise densities, U grows like dt). Strings 'per-step' | 'rate' are accepted.",
                            &parseNoiseForm, &noiseFormName)

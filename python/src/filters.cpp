@@ -10,7 +10,6 @@
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/SparseCore>
-#include <limits>
 
 namespace seif::python {
 namespace {
@@ -40,26 +39,26 @@ void bindSeifOptions(py::module_& m) {
   py::class_<SeifOptions> o(m, "SeifOptions",
                             "The SEIF's options (filters/seif_slam.hpp). Enum fields take the enum or its "
                             "name, e.g. options.sparsify = 'eseif'.");
-  bindNamedEnum<SeifOptions::Mean>(m, o, "Mean", "'amortized' | 'exact'", &SeifOptions::parseMean, &meanName)
+  bindNamedEnum<SeifOptions::Mean>(o, "Mean", "'amortized' | 'exact'", &SeifOptions::parseMean, &meanName)
       .value("Amortized", SeifOptions::Mean::Amortized)
       .value("Exact", SeifOptions::Mean::Exact);
-  bindNamedEnum<SeifOptions::Deactivate>(m, o, "Deactivate", "'weakest' | 'oldest'", &SeifOptions::parseDeactivate,
+  bindNamedEnum<SeifOptions::Deactivate>(o, "Deactivate", "'weakest' | 'oldest'", &SeifOptions::parseDeactivate,
                                          &deactivateName)
       .value("Weakest", SeifOptions::Deactivate::Weakest)
       .value("Oldest", SeifOptions::Deactivate::Oldest);
-  bindNamedEnum<SeifOptions::Recovery>(m, o, "Recovery", "'before-update' | 'after-update'",
+  bindNamedEnum<SeifOptions::Recovery>(o, "Recovery", "'before-update' | 'after-update'",
                                        &SeifOptions::parseRecovery, &recoveryName)
       .value("AfterMeasurement", SeifOptions::Recovery::AfterMeasurement)
       .value("BeforeMeasurement", SeifOptions::Recovery::BeforeMeasurement);
-  bindNamedEnum<SeifOptions::RelaxOrder>(m, o, "RelaxOrder", "'cyclic' | 'random'", &SeifOptions::parseRelaxOrder,
+  bindNamedEnum<SeifOptions::RelaxOrder>(o, "RelaxOrder", "'cyclic' | 'random'", &SeifOptions::parseRelaxOrder,
                                          &relaxOrderName)
       .value("Random", SeifOptions::RelaxOrder::Random)
       .value("Cyclic", SeifOptions::RelaxOrder::Cyclic);
-  bindNamedEnum<SeifOptions::Sparsify>(m, o, "Sparsify", "'seif' | 'eseif'", &SeifOptions::parseSparsify,
+  bindNamedEnum<SeifOptions::Sparsify>(o, "Sparsify", "'seif' | 'eseif'", &SeifOptions::parseSparsify,
                                        &sparsifyName)
       .value("Seif", SeifOptions::Sparsify::Seif)
       .value("Eseif", SeifOptions::Sparsify::Eseif);
-  bindNamedEnum<SeifOptions::Covariance>(m, o, "Covariance", "'exact' | 'local'", &SeifOptions::parseCovariance,
+  bindNamedEnum<SeifOptions::Covariance>(o, "Covariance", "'exact' | 'local'", &SeifOptions::parseCovariance,
                                          &covarianceName)
       .value("Exact", SeifOptions::Covariance::Exact)
       .value("Local", SeifOptions::Covariance::Local);
@@ -81,7 +80,7 @@ void bindSeifOptions(py::module_& m) {
 }
 
 void bindConfig(py::module_& m) {
-  bindNamedEnum<Linearization>(m, m, "Linearization",
+  bindNamedEnum<Linearization>(m, "Linearization",
                                "Where Jacobians are evaluated: Standard (newest estimates) or FirstEstimates "
                                "(FEJ). Strings 'standard' | 'fej'.",
                                &parseLinearization, &linearizationName)

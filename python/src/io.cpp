@@ -45,7 +45,7 @@ void bindSources(py::module_& m) {
            "A FilterConfig with this dataset's motion and sensor models (as `seif run` builds it).")
       .def("__repr__", [](py::handle s) { return reprOf(s, {"source", "format", "motion", "sensor", "start_pose"}); });
 
-  bindNamedEnum<DatasetFormat>(m, m, "DatasetFormat",
+  bindNamedEnum<DatasetFormat>(m, "DatasetFormat",
                                "'auto' | 'mrclam' | 'victoria-park' | 'isam' | 'g2o'", &parseDatasetFormat,
                                &datasetFormatName)
       .value("Auto", DatasetFormat::Auto)
@@ -105,12 +105,12 @@ void bindSources(py::module_& m) {
 }
 
 void bindSimulator(py::module_& m) {
-  bindNamedEnum<WorldPreset>(m, m, "WorldPreset", "'paper' | 'uniform' | 'corridor'", &parseWorldPreset,
+  bindNamedEnum<WorldPreset>(m, "WorldPreset", "'paper' | 'uniform' | 'corridor'", &parseWorldPreset,
                              &worldPresetName)
       .value("Paper", WorldPreset::Paper)
       .value("Uniform", WorldPreset::Uniform)
       .value("Corridor", WorldPreset::Corridor);
-  bindNamedEnum<PaperPath>(m, m, "PaperPath", "'lawnmower' | 'lissajous'", &parsePaperPath, &paperPathName)
+  bindNamedEnum<PaperPath>(m, "PaperPath", "'lawnmower' | 'lissajous'", &parsePaperPath, &paperPathName)
       .value("Lawnmower", PaperPath::Lawnmower)
       .value("Lissajous", PaperPath::Lissajous);
 

@@ -95,3 +95,19 @@ def test_bad_world_config_is_invalid_argument():
     config.steps = 0
     with pytest.raises(seif.InvalidArgument):
         seif.simulate(config)
+
+
+def test_exception_in_progress_callback_propagates(simulated_folder, tmp_path):
+    """A Python exception raised by a progress callback (called with the GIL re-acquired
+    from inside the GIL-released run) stops the run and reaches the caller unchanged."""
+    class Stop(Exception):
+        pass
+
+    def stop(*_):
+        raise Stop("stopped by the user")
+
+    with pytest.raises(Stop, match="stopped by the user"):
+        seif.run_dataset(seif.RunRequest(str(simulated_folder), "seif"), str(tmp_path), stop)
+    data, _ = seif.simulated_dataset("paper", steps=30)
+    with pytest.raises(Stop):
+        seif.run_filter(seif.make_filter("ekf", seif.start_pose(data)), data, stop)
