@@ -1,0 +1,86 @@
+"""seif: SLAM with Sparse Extended Information Filters (EKF, EIF, SEIF, batch MAP).
+
+Python bindings of the seif C++ library. Everything of the C++ module ``seif._core`` is
+re-exported here; this file adds a few helpers on top. Conventions are the library's: SI
+units, poses (x, y, theta) as numpy arrays, state order [x, y, theta, l1x, l1y, ...].
+
+Main entry points:
+
+* ``make_filter(spec, start, config)`` -> a filter (``SlamFilter``: ``EkfSlam``, ``EifSlam``,
+  ``SeifSlam``, ``BatchMap``) to drive with ``predict`` / ``update`` / ``step``;
+* ``open_dataset(path, format="auto")`` -> an iterable ``EventSource`` with ``.info``;
+* ``run_dataset(RunRequest, out_dir)`` -> ``RunReport`` (``seif run`` as one call);
+* ``simulate(preset_config(...))`` / ``simulated_dataset(...)`` -> the simulator's data,
+  ``run_filter(filter, dataset)`` -> ``RunOutput``;
+* experiments: ``run_paper_experiment``, ``run_consistency``, ``run_bench_case``.
+
+Errors raise ``seif.Error`` subclasses: ``DataError``, ``NumericError``,
+``InvalidArgument``, ``UnknownLandmark``.
+"""
+
+from . import _core
+from ._core import *  # noqa: F401,F403  (the bindings: every public name of seif._core)
+
+import numpy as _np
+
+__version__ = _core.__version__
+
+__all__ = [name for name in dir(_core) if not name.startswith("_")] + [
+    "simulated_dataset",
+    "observations",
+    "run",
+    "read_tum",
+    "read_map_csv",
+]
+
+
+def simulated_dataset(preset="paper", landmarks=0, steps=0, seed=1, **fields):
+    """The simulator's world as an in-memory ``Dataset`` plus its ``WorldConfig``.
+
+    ``preset``: ``"paper"``, ``"uniform"`` or ``"corridor"`` (or a ``WorldPreset``);
+    ``landmarks`` / ``steps`` <= 0 take the preset's defaults; other ``WorldConfig`` fields
+    (``paper_path``, ``sensor_range``, ...) may be given by name. Returns ``(dataset, config)``;
+    the filter's noise should be ``config.noise`` (the world's true noise).
+    """
+    config = _core.preset_config(preset, landmarks, steps, seed)
+    for name, value in fields.items():
+        if not hasattr(config, name):
+            raise _core.InvalidArgument(f"WorldConfig has no field '{name}'")
+        setattr(config, name, value)
+    return _core.build_dataset(_core.simulate(config)), config
+
+
+def observations(rows):
+    """A list of ``Observation`` from rows ``(landmark_id, z1, z2)`` (a list or an (n, 3) array).
+
+    For a range-bearing sensor z = (range [m], bearing [rad]).
+    """
+    out = []
+    for row in rows:
+        landmark, z1, z2 = row
+        out.append(_core.Observation(int(landmark), _np.array([z1, z2], dtype=float)))
+    return out
+
+
+def run(dataset, out_dir, filter="seif", progress=None, **fields):
+    """``run_dataset`` from keyword arguments: ``run("victoria_park.txt", "out", filter="ekf")``.
+
+    Other ``RunRequest`` fields (``format``, ``outlier_gate``, ``map_covariances``, ...) may be
+    given by name. ``out_dir`` must exist.
+    """
+    request = _core.RunRequest(str(dataset), filter)
+    for name, value in fields.items():
+        if not hasattr(request, name):
+            raise _core.InvalidArgument(f"RunRequest has no field '{name}'")
+        setattr(request, name, value)
+    return _core.run_dataset(request, str(out_dir), progress)
+
+
+def read_tum(path):
+    """A TUM trajectory file (``trajectory.tum``) as an (n, 8) array: t x y z qx qy qz qw."""
+    return _np.loadtxt(path, ndmin=2)
+
+
+def read_map_csv(path):
+    """``map.csv`` as a structured numpy array with its header's column names (id, x, y, ...)."""
+    return _np.genfromtxt(path, delimiter=",", names=True, ndmin=1)

@@ -1,0 +1,429 @@
+// The run loop and metrics (eval/run.hpp, eval/run_dataset.hpp), statistics (eval/stats.hpp)
+// and the experiments (eval/paper.hpp, eval/consistency.hpp, eval/bench.hpp). Long calls
+// release the GIL; progress callbacks re-acquire it (bindings.hpp: pythonCallback).
+#include "bindings.hpp"
+
+#include <seif/eval/bench.hpp>
+#include <seif/eval/consistency.hpp>
+#include <seif/eval/paper.hpp>
+#include <seif/eval/run.hpp>
+#include <seif/eval/run_dataset.hpp>
+#include <seif/eval/stats.hpp>
+
+namespace seif::python {
+namespace {
+
+/// (n, 4) array [t, x, y, theta] of a list of TimedPose.
+Eigen::MatrixXd poseArray(const std::vector<TimedPose>& poses) {
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(poses.size()), 4);
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    a.row(static_cast<Eigen::Index>(i)) << poses[i].time, poses[i].pose.transpose();
+  }
+  return a;
+}
+
+void bindRun(py::module_& m) {
+  py::class_<RunOutput>(m, "RunOutput",
+                        "What a run produced (eval/run.hpp). List attributes are copied on access; "
+                        "trajectory_array() etc. give numpy arrays.")
+      .def_readonly("steps", &RunOutput::steps)
+      .def_readonly("trajectory", &RunOutput::trajectory, "start pose, then the pose after every step")
+      .def_readonly("step_seconds", &RunOutput::step_seconds)
+      .def_readonly("pose_covariances", &RunOutput::pose_covariances)
+      .def_readonly("seconds", &RunOutput::seconds)
+      .def_readonly("final_stats", &RunOutput::final_stats)
+      .def_readonly("max_robot_links", &RunOutput::max_robot_links)
+      .def_readonly("max_blocks_touched", &RunOutput::max_blocks_touched)
+      .def_readonly("rejected_observations", &RunOutput::rejected_observations)
+      .def_readonly("dead_reckoning", &RunOutput::dead_reckoning)
+      .def_readonly("groundtruth", &RunOutput::groundtruth)
+      .def_readonly("gps", &RunOutput::gps)
+      .def_readonly("dropped", &RunOutput::dropped)
+      .def("trajectory_array", [](const RunOutput& o) { return poseArray(o.trajectory); }, "(n, 4): t, x, y, theta")
+      .def("dead_reckoning_array", [](const RunOutput& o) { return poseArray(o.dead_reckoning); })
+      .def("groundtruth_array", [](const RunOutput& o) { return poseArray(o.groundtruth); })
+      .def("gps_array",
+           [](const RunOutput& o) {
+             Eigen::MatrixXd a(static_cast<Eigen::Index>(o.gps.size()), 3);
+             for (std::size_t i = 0; i < o.gps.size(); ++i) {
+               a.row(static_cast<Eigen::Index>(i)) << o.gps[i].time, o.gps[i].position.transpose();
+             }
+             return a;
+           },
+           "(n, 3): t, x, y");
+
+  py::class_<RunErrors>(m, "RunErrors", "Errors of a run against ground truth / GPS [m]; None when not measurable.")
+      .def_readonly("ate", &RunErrors::ate)
+      .def_readonly("dead_reckoning_ate", &RunErrors::dead_reckoning_ate)
+      .def_readonly("landmark", &RunErrors::landmark)
+      .def_readonly("ate_unaligned", &RunErrors::ate_unaligned)
+      .def_readonly("dead_reckoning_ate_unaligned", &RunErrors::dead_reckoning_ate_unaligned)
+      .def_readonly("landmark_unaligned", &RunErrors::landmark_unaligned)
+      .def_readonly("gps", &RunErrors::gps)
+      .def_readonly("dead_reckoning_gps", &RunErrors::dead_reckoning_gps)
+      .def_readonly("gps_median", &RunErrors::gps_median)
+      .def_readonly("gps_fixes", &RunErrors::gps_fixes)
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"ate", "dead_reckoning_ate", "landmark", "ate_unaligned", "dead_reckoning_ate_unaligned",
+                          "landmark_unaligned", "gps", "dead_reckoning_gps", "gps_median", "gps_fixes"});
+      });
+
+  py::class_<RunRequest>(m, "RunRequest", "`seif run` as a request (eval/run_dataset.hpp).")
+      .def(py::init([](const std::filesystem::path& dataset, const std::string& filter) {
+             RunRequest r;
+             r.dataset = dataset;
+             r.filter = filter;
+             return r;
+           }),
+           py::arg("dataset") = std::filesystem::path{}, py::arg("filter") = "seif")
+      .def_readwrite("dataset", &RunRequest::dataset)
+      .def_readwrite("format", &RunRequest::format)
+      .def_readwrite("dataset_options", &RunRequest::dataset_options)
+      .def_readwrite("filter", &RunRequest::filter, "filter spec, e.g. 'seif:sparsify=eseif'")
+      .def_readwrite("outlier_gate", &RunRequest::outlier_gate)
+      .def_readwrite("seif", &RunRequest::seif, "SeifOptions (spec options override them)")
+      .def_readwrite("map_covariances", &RunRequest::map_covariances)
+      .def_readwrite("trajectory_covariances", &RunRequest::trajectory_covariances)
+      .def_readwrite("command_line", &RunRequest::command_line, "recorded in metrics.json")
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"dataset", "format", "dataset_options", "filter", "outlier_gate", "seif", "map_covariances",
+                          "trajectory_covariances"});
+      });
+
+  py::class_<RunReport>(m, "RunReport", "What run_dataset() measured.")
+      .def_readonly("info", &RunReport::info)
+      .def_readonly("output", &RunReport::output)
+      .def_readonly("errors", &RunReport::errors)
+      .def_readonly("landmarks", &RunReport::landmarks)
+      .def_readonly("seconds_wall", &RunReport::seconds_wall)
+      .def_readonly("seconds_outputs", &RunReport::seconds_outputs);
+
+  m.def(
+      "run_dataset",
+      [](const RunRequest& request, const std::filesystem::path& out, const py::object& progress) {
+        const auto callback = pythonCallback<double>(progress);
+        py::gil_scoped_release release;
+        return runDataset(request, out, callback);
+      },
+      py::arg("request"), py::arg("out_dir"), py::arg("progress") = py::none(),
+      "`seif run` as one call: writes trajectory.tum, dead_reckoning.tum, map.csv, metrics.json into "
+      "out_dir (which must exist) and returns a RunReport. progress(fraction) is called during the run. "
+      "Raises DataError, NumericError, InvalidArgument.");
+
+  m.def(
+      "run_filter",
+      [](SlamFilter& filter, const Dataset& data, const py::object& progress) {
+        const auto callback = pythonCallback<std::size_t, std::size_t>(progress);
+        py::gil_scoped_release release;
+        return runFilter(filter, data, callback);
+      },
+      py::arg("filter"), py::arg("dataset"), py::arg("progress") = py::none(),
+      "Runs every step of an in-memory Dataset through `filter` (then finish()); progress(done, total).");
+  m.def(
+      "run_filter",
+      [](SlamFilter& filter, EventSource& source, const py::object& progress, bool pose_covariances) {
+        const auto callback = pythonCallback<double>(progress);
+        py::gil_scoped_release release;
+        return runFilter(filter, source, callback, pose_covariances);
+      },
+      py::arg("filter"), py::arg("source"), py::arg("progress") = py::none(), py::arg("pose_covariances") = false,
+      "Streams an EventSource through `filter` (built with source.info's models); progress(fraction).");
+
+  m.def("start_pose", &startPose, py::arg("dataset"), "Ground truth at the first step's time, else the origin.");
+  m.def("dead_reckoning", &deadReckoning, py::arg("dataset"), py::arg("start"), py::arg("motion"),
+        "The controls integrated alone from `start`, at runFilter's stamps.");
+
+  py::enum_<Alignment>(m, "Alignment", "Unaligned (C++ None): as estimated; Rigid: after the best rigid 2-D alignment.")
+      .value("Unaligned", Alignment::None)
+      .value("Rigid", Alignment::Rigid);
+  m.def(
+      "aligned_rmse",
+      [](const std::vector<Vec2>& est, const std::vector<Vec2>& truth, Alignment a) {
+        return alignedRmse(est, truth, a);
+      },
+      py::arg("estimate"), py::arg("truth"), py::arg("alignment") = Alignment::Rigid);
+  m.def("ate_rmse", &ateRmse, py::arg("estimate"), py::arg("groundtruth"), py::arg("alignment") = Alignment::None,
+        "Absolute trajectory error [m]; None without ground truth.");
+  m.def("landmark_rmse", &landmarkRmse, py::arg("filter"), py::arg("truth"), py::arg("alignment") = Alignment::None,
+        "RMS landmark error [m] of the filter's map against {id: (x, y)}.");
+  m.def(
+      "gps_rmse",
+      [](const std::vector<TimedPose>& trajectory, const std::vector<GpsFix>& gps) {
+        std::size_t compared = 0;
+        std::optional<double> median;
+        const auto rmse = gpsRmse(trajectory, gps, &compared, &median);
+        return py::make_tuple(rmse, compared, median);
+      },
+      py::arg("trajectory"), py::arg("gps"), "(rmse, fixes compared, median) after rigid alignment.");
+  m.def("evaluate_run", &evaluateRun, py::arg("filter"), py::arg("info"), py::arg("output"));
+  m.def("seif_options_json", &seifOptionsJson, py::arg("options"));
+}
+
+void bindStats(py::module_& m) {
+  py::class_<Summary>(m, "Summary", "Summary of a sample (eval/stats.hpp).")
+      .def_readonly("n", &Summary::n)
+      .def_readonly("mean", &Summary::mean)
+      .def_readonly("sd", &Summary::sd)
+      .def_readonly("ci95", &Summary::ci95)
+      .def_readonly("min", &Summary::min)
+      .def_readonly("max", &Summary::max)
+      .def_readonly("median", &Summary::median)
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"n", "mean", "sd", "ci95", "min", "max", "median"}); });
+  py::class_<Band>(m, "Band", "A [lo, hi] band.")
+      .def_readonly("lo", &Band::lo)
+      .def_readonly("hi", &Band::hi)
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"lo", "hi"}); });
+  m.def("summarize", [](const std::vector<double>& xs) { return summarize(xs); }, py::arg("xs"));
+  m.def("ci95_half_width", [](const std::vector<double>& xs) { return ci95HalfWidth(xs); }, py::arg("xs"));
+  m.def("student_t_quantile", &studentTQuantile, py::arg("p"), py::arg("dof"));
+  m.def("chi_square_quantile", &chiSquareQuantile, py::arg("p"), py::arg("dof"));
+  m.def("chi_square_cdf", &chiSquareCdf, py::arg("x"), py::arg("dof"));
+  m.def("nees_band95", &neesBand95, py::arg("samples"), py::arg("dof"),
+        "95 % band of the mean of `samples` NEES values of `dof` degrees of freedom.");
+}
+
+void bindPaper(py::module_& m) {
+  py::class_<PaperOptions>(m, "PaperOptions", "What the paper's experiment varies (eval/paper.hpp).")
+      .def(py::init<>())
+      .def_readwrite("landmarks", &PaperOptions::landmarks)
+      .def_readwrite("steps", &PaperOptions::steps)
+      .def_readwrite("active", &PaperOptions::active)
+      .def_readwrite("relax", &PaperOptions::relax)
+      .def_readwrite("path", &PaperOptions::path)
+      .def_readwrite("sweep_active", &PaperOptions::sweep_active)
+      .def_readwrite("extra", &PaperOptions::extra)
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"landmarks", "steps", "active", "relax", "path", "sweep_active", "extra"});
+      });
+  py::class_<PaperFilterSpec>(m, "PaperFilterSpec")
+      .def_readonly("name", &PaperFilterSpec::name)
+      .def_readonly("ekf", &PaperFilterSpec::ekf)
+      .def_readonly("seif", &PaperFilterSpec::seif)
+      .def_readonly("spec", &PaperFilterSpec::spec);
+  m.def("paper_filters", &paperFilters, py::arg("options") = PaperOptions{});
+  m.def("paper_world", &paperWorld, py::arg("seed"), py::arg("options") = PaperOptions{},
+        "The simulator configuration of the paper's run with seed `seed`.");
+  m.def(
+      "landmark_mse",
+      [](const SlamFilter& f, const std::map<int, Vec2>& truth) {
+        std::size_t count = 0;
+        const double mse = landmarkMse(f, truth, &count);
+        return py::make_tuple(mse, count);
+      },
+      py::arg("filter"), py::arg("truth"), "(mean squared landmark error [m^2], landmarks averaged).");
+
+  py::class_<PaperFilterResult>(m, "PaperFilterResult")
+      .def_readonly("name", &PaperFilterResult::name)
+      .def_readonly("mse", &PaperFilterResult::mse)
+      .def_readonly("rmse", &PaperFilterResult::rmse)
+      .def_readonly("aligned_mse", &PaperFilterResult::aligned_mse)
+      .def_readonly("pose_error", &PaperFilterResult::pose_error)
+      .def_readonly("mapped", &PaperFilterResult::mapped)
+      .def_readonly("stats", &PaperFilterResult::stats)
+      .def_readonly("step_seconds", &PaperFilterResult::step_seconds)
+      .def_readonly("landmark_nees", &PaperFilterResult::landmark_nees)
+      .def_readonly("pose_nees", &PaperFilterResult::pose_nees)
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"name", "mse", "aligned_mse", "pose_error", "mapped", "landmark_nees", "pose_nees"});
+      });
+  py::class_<PaperRun>(m, "PaperRun")
+      .def_readonly("seed", &PaperRun::seed)
+      .def_readonly("steps", &PaperRun::steps)
+      .def_readonly("sim", &PaperRun::sim)
+      .def_readonly("filters", &PaperRun::filters);
+  py::class_<PaperFilterSummary>(m, "PaperFilterSummary")
+      .def_readonly("name", &PaperFilterSummary::name)
+      .def_readonly("seeds", &PaperFilterSummary::seeds)
+      .def_readonly("mse", &PaperFilterSummary::mse)
+      .def_readonly("rmse", &PaperFilterSummary::rmse)
+      .def_readonly("aligned_mse", &PaperFilterSummary::aligned_mse)
+      .def_readonly("links", &PaperFilterSummary::links)
+      .def_readonly("mapped", &PaperFilterSummary::mapped)
+      .def_readonly("robot_links", &PaperFilterSummary::robot_links)
+      .def_readonly("pose_error", &PaperFilterSummary::pose_error)
+      .def_readonly("landmark_nees", &PaperFilterSummary::landmark_nees)
+      .def_readonly("pose_nees", &PaperFilterSummary::pose_nees)
+      .def_readonly("diff_to_ekf", &PaperFilterSummary::diff_to_ekf)
+      .def_readonly("error", &PaperFilterSummary::error)
+      .def_readonly("rms", &PaperFilterSummary::rms)
+      .def_readonly("aligned_error", &PaperFilterSummary::aligned_error)
+      .def_readonly("link", &PaperFilterSummary::link)
+      .def_readonly("map", &PaperFilterSummary::map)
+      .def_readonly("diff", &PaperFilterSummary::diff)
+      .def_readonly("pose", &PaperFilterSummary::pose)
+      .def_readonly("nees", &PaperFilterSummary::nees)
+      .def_readonly("nees_pose", &PaperFilterSummary::nees_pose)
+      .def_readonly("us_median", &PaperFilterSummary::us_median)
+      .def_readonly("us_mean", &PaperFilterSummary::us_mean)
+      .def_readonly("ratio", &PaperFilterSummary::ratio)
+      .def_readonly("ratio_ci95", &PaperFilterSummary::ratio_ci95)
+      .def_readonly("ratio_median", &PaperFilterSummary::ratio_median)
+      .def_readonly("aligned_ratio", &PaperFilterSummary::aligned_ratio);
+  m.def("summarize_paper_filter", &summarizePaperFilter, py::arg("filter_index"), py::arg("runs"),
+        "Summary of filter `filter_index` (paper_filters() order; 0 = the EKF) over runs.");
+
+  py::class_<PaperRunDetail>(m, "PaperRunDetail", "The data and the filters of one paper run, kept for figures.")
+      .def_readonly("data", &PaperRunDetail::data)
+      .def_property_readonly(
+          "filters",
+          [](py::object self) {
+            py::list out;
+            for (const auto& f : self.cast<PaperRunDetail&>().filters) {
+              out.append(py::cast(f.get(), py::return_value_policy::reference_internal, self));
+            }
+            return out;
+          },
+          "the filters in paper_filters() order (alive as long as this object)")
+      .def_readonly("outputs", &PaperRunDetail::outputs);
+  m.def(
+      "run_paper_experiment",
+      [](std::uint64_t seed, const PaperOptions& options) {
+        py::gil_scoped_release release;
+        return runPaperExperiment(seed, options);
+      },
+      py::arg("seed"), py::arg("options") = PaperOptions{},
+      "One run of the paper's experiment (EKF, SEIF with exact mean, constant-time SEIF, ... on one simulated "
+      "world). Deterministic in (seed, options) except step times.");
+  m.def(
+      "run_paper_experiment_detail",
+      [](std::uint64_t seed, const PaperOptions& options) {
+        auto detail = std::make_unique<PaperRunDetail>();
+        PaperRun run;
+        {
+          py::gil_scoped_release release;
+          run = runPaperExperiment(seed, options, detail.get());
+        }
+        return py::make_tuple(std::move(run), std::move(detail));
+      },
+      py::arg("seed"), py::arg("options") = PaperOptions{}, "run_paper_experiment() and its detail: (run, detail).");
+
+  py::class_<FilterSnapshot::Link>(m, "SnapshotLink")
+      .def_readonly("a", &FilterSnapshot::Link::a)
+      .def_readonly("b", &FilterSnapshot::Link::b)
+      .def_readonly("strength", &FilterSnapshot::Link::strength);
+  py::class_<FilterSnapshot>(m, "FilterSnapshot", "A filter's state with landmarks ordered by id (for figures).")
+      .def_readonly("ids", &FilterSnapshot::ids)
+      .def_readonly("mean", &FilterSnapshot::mean)
+      .def_readonly("covariance", &FilterSnapshot::covariance)
+      .def_readonly("information", &FilterSnapshot::information)
+      .def_readonly("links", &FilterSnapshot::links);
+  m.def("snapshot_by_id", &snapshotById, py::arg("filter"), py::call_guard<py::gil_scoped_release>());
+}
+
+void bindConsistency(py::module_& m) {
+  py::class_<ConsistencyOptions>(m, "ConsistencyOptions", "The Monte-Carlo NEES study (eval/consistency.hpp).")
+      .def(py::init<>())
+      .def_readwrite("world", &ConsistencyOptions::world)
+      .def_readwrite("runs", &ConsistencyOptions::runs)
+      .def_readwrite("filters", &ConsistencyOptions::filters, "list of FilterSpec (parse_filter_spec)")
+      .def_readwrite("samples", &ConsistencyOptions::samples)
+      .def_readwrite("threads", &ConsistencyOptions::threads, "0: the number of cores");
+  py::class_<NeesPoint>(m, "NeesPoint")
+      .def_readonly("pose", &NeesPoint::pose)
+      .def_readonly("landmark", &NeesPoint::landmark)
+      .def_readonly("pose_relative", &NeesPoint::pose_relative)
+      .def_readonly("landmark_relative", &NeesPoint::landmark_relative)
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"pose", "landmark", "pose_relative", "landmark_relative"}); });
+  py::class_<ConsistencyFilterResult>(m, "ConsistencyFilterResult")
+      .def_readonly("name", &ConsistencyFilterResult::name)
+      .def_readonly("nees", &ConsistencyFilterResult::nees)
+      .def_readonly("nees_final", &ConsistencyFilterResult::nees_final)
+      .def_readonly("landmark_nees_runs", &ConsistencyFilterResult::landmark_nees_runs)
+      .def_readonly("error_final", &ConsistencyFilterResult::error_final)
+      .def_readonly("error_aligned_final", &ConsistencyFilterResult::error_aligned_final)
+      .def_readonly("mse_final", &ConsistencyFilterResult::mse_final)
+      .def_readonly("mse_aligned_final", &ConsistencyFilterResult::mse_aligned_final)
+      .def_readonly("seconds", &ConsistencyFilterResult::seconds);
+  py::class_<ConsistencyResult>(m, "ConsistencyResult")
+      .def_readonly("runs", &ConsistencyResult::runs)
+      .def_readonly("steps", &ConsistencyResult::steps)
+      .def_readonly("pose_band", &ConsistencyResult::pose_band)
+      .def_readonly("landmark_band", &ConsistencyResult::landmark_band)
+      .def_readonly("sample_steps", &ConsistencyResult::sample_steps)
+      .def_readonly("filters", &ConsistencyResult::filters);
+  m.def(
+      "run_consistency",
+      [](const ConsistencyOptions& options, const py::object& progress) {
+        const auto callback = pythonCallback<std::size_t, std::size_t>(progress);
+        py::gil_scoped_release release;
+        return runConsistency(options, callback);
+      },
+      py::arg("options"), py::arg("progress") = py::none(),
+      "Runs the NEES study on worker threads; progress(done, total) counts runs.");
+  m.def("measure_nees", &measureNees, py::arg("filter"), py::arg("true_pose"), py::arg("truth"));
+  m.def("consistency_json", &consistencyJson, py::arg("result"), py::arg("options"));
+  m.def("consistency_table", &consistencyTable, py::arg("result"));
+}
+
+void bindBench(py::module_& m) {
+  py::class_<BenchCase>(m, "BenchCase", "One (filter, N) of the scaling benchmark (eval/bench.hpp).")
+      .def(py::init<>())
+      .def_readwrite("filter", &BenchCase::filter)
+      .def_readwrite("landmarks", &BenchCase::landmarks)
+      .def_readwrite("window", &BenchCase::window)
+      .def_readwrite("seed", &BenchCase::seed)
+      .def_readwrite("seif", &BenchCase::seif);
+  py::class_<BenchMeasurement>(m, "BenchMeasurement", "Times in microseconds, memory in MiB.")
+      .def_readonly("filter", &BenchMeasurement::filter)
+      .def_readonly("landmarks", &BenchMeasurement::landmarks)
+      .def_readonly("steps", &BenchMeasurement::steps)
+      .def_readonly("steps_run", &BenchMeasurement::steps_run)
+      .def_readonly("map_first", &BenchMeasurement::map_first)
+      .def_readonly("map_last", &BenchMeasurement::map_last)
+      .def_readonly("us_per_step_median", &BenchMeasurement::us_per_step_median)
+      .def_readonly("us_per_step_p90", &BenchMeasurement::us_per_step_p90)
+      .def_readonly("us_per_step_mean", &BenchMeasurement::us_per_step_mean)
+      .def_readonly("us_per_step_max", &BenchMeasurement::us_per_step_max)
+      .def_readonly("observations_per_step", &BenchMeasurement::observations_per_step)
+      .def_readonly("sim_seconds", &BenchMeasurement::sim_seconds)
+      .def_readonly("run_seconds", &BenchMeasurement::run_seconds)
+      .def_readonly("max_blocks_touched", &BenchMeasurement::max_blocks_touched)
+      .def_readonly("max_robot_links", &BenchMeasurement::max_robot_links)
+      .def_readonly("peak_rss_mb", &BenchMeasurement::peak_rss_mb)
+      .def_readonly("base_rss_mb", &BenchMeasurement::base_rss_mb)
+      .def_readonly("sim_peak_mb", &BenchMeasurement::sim_peak_mb)
+      .def_readonly("data_rss_mb", &BenchMeasurement::data_rss_mb)
+      .def_readonly("filter_peak_mb", &BenchMeasurement::filter_peak_mb)
+      .def_readonly("filter_final_mb", &BenchMeasurement::filter_final_mb)
+      .def_readonly("peak_reset", &BenchMeasurement::peak_reset);
+  m.def("run_bench_case", &runBenchCase, py::arg("case"), py::call_guard<py::gil_scoped_release>(),
+        "Measures one case in this process (the Python interpreter's memory counts in the RSS figures).");
+  m.def("quantile", &quantile, py::arg("values"), py::arg("q"));
+  py::class_<ProcessMemory>(m, "ProcessMemory")
+      .def_readonly("rss_mb", &ProcessMemory::rss_mb)
+      .def_readonly("peak_mb", &ProcessMemory::peak_mb);
+  m.def("process_memory", &processMemory);
+  m.def("step_cost_exponent", &stepCostExponent, py::arg("filter"));
+  m.def("dense_matrix_bytes", &denseMatrixBytes, py::arg("filter"), py::arg("landmarks"));
+  py::class_<BenchPoint>(m, "BenchPoint")
+      .def(py::init<>())
+      .def_readwrite("landmarks", &BenchPoint::landmarks)
+      .def_readwrite("seconds_per_step", &BenchPoint::seconds_per_step)
+      .def_readwrite("filter_bytes", &BenchPoint::filter_bytes)
+      .def_readwrite("data_bytes", &BenchPoint::data_bytes)
+      .def_readwrite("steps", &BenchPoint::steps);
+  py::class_<BenchEstimate>(m, "BenchEstimate")
+      .def_readonly("exponent", &BenchEstimate::exponent)
+      .def_readonly("seconds_per_step", &BenchEstimate::seconds_per_step)
+      .def_readonly("build_seconds", &BenchEstimate::build_seconds)
+      .def_readonly("bytes", &BenchEstimate::bytes)
+      .def_readonly("matrix_bytes", &BenchEstimate::matrix_bytes);
+  m.def(
+      "estimate_bench_case",
+      [](const std::string& filter, int landmarks, double steps, const std::vector<BenchPoint>& measured) {
+        return estimateBenchCase(filter, landmarks, steps, measured);
+      },
+      py::arg("filter"), py::arg("landmarks"), py::arg("steps"), py::arg("measured"));
+}
+
+}  // namespace
+
+void bindEval(py::module_& m) {
+  bindRun(m);
+  bindStats(m);
+  bindPaper(m);
+  bindConsistency(m);
+  bindBench(m);
+}
+
+}  // namespace seif::python

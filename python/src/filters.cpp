@@ -1,0 +1,275 @@
+// The filters (filters/*.hpp): FilterConfig, SeifOptions, make_filter and the SlamFilter
+// interface, with the SEIF's sparse information matrix as scipy.sparse.csc_matrix.
+#include "bindings.hpp"
+
+#include <seif/filters/batch_map.hpp>
+#include <seif/filters/eif_slam.hpp>
+#include <seif/filters/ekf_slam.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/filters/seif_slam.hpp>
+#include <seif/filters/slam_filter.hpp>
+
+#include <Eigen/SparseCore>
+
+namespace seif::python {
+namespace {
+
+template <typename T>
+std::shared_ptr<T> mutableModel(const std::shared_ptr<const T>& p) {
+  return std::const_pointer_cast<T>(p);  // models are immutable: no method of theirs changes them
+}
+
+// Lower-case names of SeifOptions' enums, the inverse of SeifOptions::parse*.
+std::string_view meanName(SeifOptions::Mean v) { return v == SeifOptions::Mean::Exact ? "exact" : "amortized"; }
+std::string_view deactivateName(SeifOptions::Deactivate v) {
+  return v == SeifOptions::Deactivate::Oldest ? "oldest" : "weakest";
+}
+std::string_view recoveryName(SeifOptions::Recovery v) {
+  return v == SeifOptions::Recovery::BeforeMeasurement ? "before-update" : "after-update";
+}
+std::string_view relaxOrderName(SeifOptions::RelaxOrder v) {
+  return v == SeifOptions::RelaxOrder::Cyclic ? "cyclic" : "random";
+}
+std::string_view sparsifyName(SeifOptions::Sparsify v) { return v == SeifOptions::Sparsify::Eseif ? "eseif" : "seif"; }
+std::string_view covarianceName(SeifOptions::Covariance v) {
+  return v == SeifOptions::Covariance::Local ? "local" : "exact";
+}
+
+void bindSeifOptions(py::module_& m) {
+  py::class_<SeifOptions> o(m, "SeifOptions",
+                            "The SEIF's options (filters/seif_slam.hpp). Enum fields take the enum or its "
+                            "name, e.g. options.sparsify = 'eseif'.");
+  bindNamedEnum<SeifOptions::Mean>(o, "Mean", "'amortized' | 'exact'", &SeifOptions::parseMean, &meanName)
+      .value("Amortized", SeifOptions::Mean::Amortized)
+      .value("Exact", SeifOptions::Mean::Exact);
+  bindNamedEnum<SeifOptions::Deactivate>(o, "Deactivate", "'weakest' | 'oldest'", &SeifOptions::parseDeactivate,
+                                         &deactivateName)
+      .value("Weakest", SeifOptions::Deactivate::Weakest)
+      .value("Oldest", SeifOptions::Deactivate::Oldest);
+  bindNamedEnum<SeifOptions::Recovery>(o, "Recovery", "'before-update' | 'after-update'",
+                                       &SeifOptions::parseRecovery, &recoveryName)
+      .value("AfterMeasurement", SeifOptions::Recovery::AfterMeasurement)
+      .value("BeforeMeasurement", SeifOptions::Recovery::BeforeMeasurement);
+  bindNamedEnum<SeifOptions::RelaxOrder>(o, "RelaxOrder", "'cyclic' | 'random'", &SeifOptions::parseRelaxOrder,
+                                         &relaxOrderName)
+      .value("Random", SeifOptions::RelaxOrder::Random)
+      .value("Cyclic", SeifOptions::RelaxOrder::Cyclic);
+  bindNamedEnum<SeifOptions::Sparsify>(o, "Sparsify", "'seif' | 'eseif'", &SeifOptions::parseSparsify,
+                                       &sparsifyName)
+      .value("Seif", SeifOptions::Sparsify::Seif)
+      .value("Eseif", SeifOptions::Sparsify::Eseif);
+  bindNamedEnum<SeifOptions::Covariance>(o, "Covariance", "'exact' | 'local'", &SeifOptions::parseCovariance,
+                                         &covarianceName)
+      .value("Exact", SeifOptions::Covariance::Exact)
+      .value("Local", SeifOptions::Covariance::Local);
+  o.def(py::init<>())
+      .def_readwrite("max_active", &SeifOptions::max_active, "theta_x: landmarks linked to the robot after each step")
+      .def_readwrite("relax", &SeifOptions::relax, "K: landmarks relaxed per step besides the robot and the active ones")
+      .def_readwrite("mean", &SeifOptions::mean, "amortized (constant time) or exact (sparse Cholesky)")
+      .def_readwrite("deactivate", &SeifOptions::deactivate, "weakest (the paper) or oldest")
+      .def_readwrite("recovery", &SeifOptions::recovery, "when the amortised mean is relaxed in update()")
+      .def_readwrite("relax_order", &SeifOptions::relax_order, "which K landmarks each step relaxes")
+      .def_readwrite("seed", &SeifOptions::seed, "seed of the random choice of relaxed landmarks")
+      .def_readwrite("sparsify", &SeifOptions::sparsify, "seif (the paper's conditioning) or eseif")
+      .def_readwrite("covariance", &SeifOptions::covariance, "exact or local marginal covariances")
+      .def_readwrite("eseif_beta", &SeifOptions::eseif_beta, "ESEIF: landmarks whose observations relocalise the robot")
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"max_active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
+                          "covariance", "eseif_beta"});
+      });
+}
+
+void bindConfig(py::module_& m) {
+  bindNamedEnum<Linearization>(m, "Linearization",
+                               "Where Jacobians are evaluated: Standard (newest estimates) or FirstEstimates "
+                               "(FEJ). Strings 'standard' | 'fej'.",
+                               &parseLinearization, &linearizationName)
+      .value("Standard", Linearization::Standard)
+      .value("FirstEstimates", Linearization::FirstEstimates);
+
+  py::class_<FilterConfig>(m, "FilterConfig",
+                           "What every filter is built with (filters/slam_filter.hpp). motion / sensor None: the "
+                           "paper's velocity model (per-step) and range-bearing sensor from `noise`.")
+      .def(py::init<>())
+      .def_property(
+          "motion", [](const FilterConfig& c) { return mutableModel(c.motion); },
+          [](FilterConfig& c, std::shared_ptr<MotionModel> p) { c.motion = std::move(p); },
+          "The motion model of predict(input); None: the paper's.")
+      .def_property(
+          "sensor", [](const FilterConfig& c) { return mutableModel(c.sensor); },
+          [](FilterConfig& c, std::shared_ptr<MeasurementModel> p) { c.sensor = std::move(p); },
+          "The sensor model of update(observations); None: the paper's.")
+      .def_readwrite("noise", &FilterConfig::noise, "NoiseModel of the default models")
+      .def_readwrite("initial_pose_sigma", &FilterConfig::initial_pose_sigma,
+                     "start pose standard deviations (x [m], y [m], theta [rad])")
+      .def_readwrite("outlier_gate", &FilterConfig::outlier_gate,
+                     "gross-outlier gate in measurement standard deviations; inf disables it")
+      .def_readwrite("linearization", &FilterConfig::linearization)
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"motion", "sensor", "noise", "initial_pose_sigma", "outlier_gate", "linearization"});
+      });
+
+  py::class_<FilterStats>(m, "FilterStats", "Structure of the information matrix H (filters/slam_filter.hpp).")
+      .def(py::init<>())
+      .def_readonly("landmarks", &FilterStats::landmarks)
+      .def_readonly("links", &FilterStats::links, "non-zero off-diagonal blocks of H (unordered pairs)")
+      .def_readonly("robot_links", &FilterStats::robot_links, "landmarks linked to the robot (the active set)")
+      .def_readonly("max_landmark_links", &FilterStats::max_landmark_links)
+      .def_readonly("blocks_touched", &FilterStats::blocks_touched, "H blocks read or written by the last step")
+      .def("as_dict",
+           [](const FilterStats& s) {
+             py::dict d;
+             d["landmarks"] = s.landmarks;
+             d["links"] = s.links;
+             d["robot_links"] = s.robot_links;
+             d["max_landmark_links"] = s.max_landmark_links;
+             d["blocks_touched"] = s.blocks_touched;
+             return d;
+           })
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"landmarks", "links", "robot_links", "max_landmark_links", "blocks_touched"});
+      });
+
+  py::class_<PredictedMeasurement>(m, "PredictedMeasurement",
+                                   "A landmark's predicted measurement z and innovation covariance S.")
+      .def_readonly("z", &PredictedMeasurement::z)
+      .def_readonly("S", &PredictedMeasurement::S)
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"z", "S"}); });
+
+  py::class_<FilterSpec>(m, "FilterSpec", "A parsed filter spec (filters/factory.hpp).")
+      .def(py::init<>())
+      .def_readwrite("text", &FilterSpec::text)
+      .def_readwrite("name", &FilterSpec::name)
+      .def_readwrite("linearization", &FilterSpec::linearization)
+      .def_readwrite("seif", &FilterSpec::seif)
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"text", "name", "linearization", "seif"}); });
+  m.def("parse_filter_spec", &parseFilterSpec, py::arg("text"), py::arg("linearization") = Linearization::Standard,
+        py::arg("seif") = SeifOptions{},
+        "Parses 'name[:key=value,...]' (ekf, eif, seif, batch). Raises InvalidArgument naming what is wrong.");
+  m.def("split_filter_list", &splitFilterList, py::arg("list"),
+        "Splits 'batch,ekf,seif:sparsify=eseif,beta=4' into specs.");
+}
+
+void bindSlamFilter(py::module_& m) {
+  using Columns = Eigen::Matrix<double, Eigen::Dynamic, 2>;
+  py::class_<SlamFilter>(m, "SlamFilter",
+                         "The interface of every filter (EKF, EIF, SEIF, batch MAP). Build one with make_filter().\n"
+                         "State order [x, y, theta, l1x, l1y, ...], landmarks in the order they entered the map.")
+      .def_property_readonly("name", &SlamFilter::name, "'ekf', 'eif', 'seif' or 'batch'")
+      .def("predict", py::overload_cast<const MotionIncrement&>(&SlamFilter::predict), py::arg("increment"),
+           "Motion update with an increment linearised at this filter's pose.")
+      .def("predict", py::overload_cast<const MotionInput&>(&SlamFilter::predict), py::arg("input"),
+           "Motion update with an input (VelocityControl, AckermannControl, OdometryIncrement) and the "
+           "config's motion model.")
+      .def(
+          "update",
+          [](SlamFilter& f, const std::vector<Observation>& z, const MeasurementModel* sensor) {
+            if (sensor) f.update(z, *sensor);
+            else f.update(z);
+          },
+          py::arg("observations"), py::arg("sensor") = nullptr,
+          "Measurement update with all observations of one instant, by `sensor` (default: the config's).")
+      .def(
+          "step", [](SlamFilter& f, const MotionInput& u, const std::vector<Observation>& z) { f.step(u, z); },
+          py::arg("input"), py::arg("observations") = std::vector<Observation>{},
+          "predict(input) then update(observations): one filter cycle.")
+      .def("finish", &SlamFilter::finish, py::call_guard<py::gil_scoped_release>(),
+           "Call once after the last step (the batch MAP solves here; a filter does nothing).")
+      .def_property_readonly("smoother", &SlamFilter::smoother)
+      .def("smoothed_trajectory", &SlamFilter::smoothedTrajectory, "A smoother's poses after finish(); [] for a filter.")
+      .def("smoothed_trajectory_covariances", &SlamFilter::smoothedTrajectoryCovariances)
+      .def_property_readonly("motion_model", [](const SlamFilter& f) { return f.motionModel().describe(); },
+                             "describe() of the config's motion model")
+      .def_property_readonly("sensor_model", [](const SlamFilter& f) { return f.sensorModel().describe(); },
+                             "describe() of the config's sensor model")
+      .def(
+          "predict_measurement",
+          [](const SlamFilter& f, int id, const MeasurementModel* sensor, const std::optional<Mat2>& R) {
+            const MeasurementModel& s = sensor ? *sensor : f.sensorModel();
+            return f.predictMeasurement(id, s, R ? *R : s.noise());
+          },
+          py::arg("id"), py::arg("sensor") = nullptr, py::arg("R") = py::none(),
+          "Predicted measurement of landmark `id` and its innovation covariance S = J Sigma J^T + R "
+          "(defaults: the config's sensor and its noise). Raises UnknownLandmark.")
+      .def("pose", &SlamFilter::pose, "(x, y, theta), heading wrapped")
+      .def("pose_covariance", &SlamFilter::poseCovariance, "3x3 marginal covariance of the pose")
+      .def("landmark_ids", &SlamFilter::landmarkIds, "ids in state order")
+      .def("has_landmark", &SlamFilter::hasLandmark, py::arg("id"))
+      .def("landmark", &SlamFilter::landmark, py::arg("id"), "(x, y); raises UnknownLandmark")
+      .def("landmark_covariance", &SlamFilter::landmarkCovariance, py::arg("id"), "2x2; raises UnknownLandmark")
+      .def("landmark_covariance_columns", [](const SlamFilter& f, int id) -> Columns { return f.landmarkCovarianceColumns(id); },
+           py::arg("id"), "The two columns of the joint covariance of landmark `id` (n x 2).")
+      .def("stats", &SlamFilter::stats, "FilterStats: the structure of H (use .as_dict() for a dict)")
+      .def_property_readonly("robot_links", &SlamFilter::robotLinks)
+      .def_property_readonly("blocks_touched", &SlamFilter::blocksTouched)
+      .def("rejected_observations", &SlamFilter::rejectedObservations,
+           "observations rejected by the gross-outlier gate so far")
+      .def("mean", &SlamFilter::mean, "full state mean [x, y, theta, landmarks...] (SEIF: its current estimate)")
+      .def("covariance", &SlamFilter::covariance, py::call_guard<py::gil_scoped_release>(),
+           "dense full covariance (O(N^3) for information filters)")
+      .def("information_dense", &SlamFilter::information, py::call_guard<py::gil_scoped_release>(),
+           "dense information matrix H as a numpy array (EKF, batch: the inverse of the covariance)")
+      .def(
+          "information",
+          [](const SlamFilter& f) -> Eigen::SparseMatrix<double> {
+            Eigen::SparseMatrix<double> H;
+            {
+              py::gil_scoped_release release;
+              H = f.information().sparseView();
+            }
+            return H;
+          },
+          "The information matrix H as scipy.sparse.csc_matrix. SEIF: its own sparse H "
+          "(sparseInformation(), stored blocks); dense filters: their dense H without its exact zeros. "
+          "information_dense() gives a numpy array.")
+      .def("__repr__", [](const SlamFilter& f) {
+        return "<" + f.name() + " filter: " + std::to_string(f.landmarkIds().size()) + " landmarks>";
+      });
+
+  py::class_<EkfSlam, SlamFilter>(m, "EkfSlam", "EKF-SLAM with a dense covariance.")
+      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config") = FilterConfig{});
+  py::class_<EifSlam, SlamFilter>(m, "EifSlam", "The exact EIF with a dense information matrix.")
+      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config") = FilterConfig{})
+      .def("information_vector", &EifSlam::informationVector, "b");
+  py::class_<SeifSlam, SlamFilter>(m, "SeifSlam", "The Sparse Extended Information Filter.")
+      .def(py::init<const Pose2&, const FilterConfig&, const SeifOptions&>(), py::arg("start"),
+           py::arg("config") = FilterConfig{}, py::arg("options") = SeifOptions{})
+      .def("information", &SeifSlam::sparseInformation,
+           "H as scipy.sparse.csc_matrix, in the state order (SeifSlam::sparseInformation()).")
+      .def("information_vector", &SeifSlam::informationVector, "b")
+      .def("exact_mean", &SeifSlam::exactMean, py::call_guard<py::gil_scoped_release>(),
+           "H^-1 b by sparse Cholesky, without changing the filter")
+      .def("relax_mean", &SeifSlam::relaxMean, py::arg("sweeps"), "Gauss-Seidel sweeps of the mean over every variable")
+      .def("active_landmarks", &SeifSlam::activeLandmarks, "ids of the landmarks linked to the robot")
+      .def_property_readonly("options", &SeifSlam::options)
+      .def("last_sparsification_residual", &SeifSlam::lastSparsificationResidual)
+      .def_property_readonly("eseif_relocalizations", &SeifSlam::eseifRelocalizations)
+      .def_property_readonly("eseif_deferrals", &SeifSlam::eseifDeferrals)
+      .def_property_readonly("eseif_fallbacks", &SeifSlam::eseifFallbacks);
+  py::class_<BatchMap, SlamFilter>(m, "BatchMap", "The batch MAP smoother: estimates are final after finish().")
+      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config") = FilterConfig{})
+      .def_property_readonly("cost", &BatchMap::cost)
+      .def_property_readonly("iterations", &BatchMap::iterations)
+      .def_property_readonly("constraint_violation", &BatchMap::constraintViolation);
+
+  m.def(
+      "make_filter",
+      [](const std::string& spec, const Pose2& start, const FilterConfig& config, const SeifOptions& seif) {
+        return makeFilter(spec, start, config, seif);
+      },
+      py::arg("spec") = "seif", py::arg("start") = Pose2::Zero().eval(), py::arg("config") = FilterConfig{},
+      py::arg("seif_options") = SeifOptions{},
+      "Builds a filter from its spec, 'ekf', 'eif', 'seif', 'batch', with options after a colon "
+      "('seif:sparsify=eseif,linearization=fej'); unset options come from config.linearization and "
+      "seif_options. Raises InvalidArgument for a bad spec.");
+}
+
+}  // namespace
+
+void bindFilters(py::module_& m) {
+  bindSeifOptions(m);
+  bindConfig(m);
+  bindSlamFilter(m);
+}
+
+}  // namespace seif::python

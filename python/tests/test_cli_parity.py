@@ -1,0 +1,87 @@
+"""The same run from Python (run_dataset) and from the CLI (`seif run`) writes the same
+files, and metrics.json holds the same values (timings and the command line aside)."""
+import json
+
+import numpy as np
+import pytest
+
+import seif
+from conftest import run_cli
+
+# metrics.json keys that legitimately differ between two runs.
+def as_written(values):
+    """The values as the result files print them (%.9g), read back."""
+    return np.vectorize(lambda v: float(f"{v:.9g}"))(np.asarray(values, dtype=float))
+
+
+# The CLI's --beta defaults to 4, the library's SeifOptions.eseif_beta to 2: the CLI is
+# pinned to the library's default so that both runs use the same options.
+LIBRARY_BETA = ["--beta", str(seif.SeifOptions().eseif_beta)]
+
+VOLATILE = {"seconds", "seconds_wall", "seconds_trajectory_and_map", "us_per_step", "us_per_step_median",
+            "command_line"}
+
+
+def compare_outputs(cli_dir, py_dir):
+    for name in ("trajectory.tum", "dead_reckoning.tum", "map.csv"):
+        assert (cli_dir / name).read_bytes() == (py_dir / name).read_bytes(), name
+    cli_metrics = json.loads((cli_dir / "metrics.json").read_text())
+    py_metrics = json.loads((py_dir / "metrics.json").read_text())
+    assert cli_metrics.keys() == py_metrics.keys()
+    for key in cli_metrics.keys() - VOLATILE:
+        assert cli_metrics[key] == py_metrics[key], key
+    return py_metrics
+
+
+@pytest.mark.parametrize("spec", ["seif", "ekf", "seif:sparsify=eseif"])
+def test_simulated_folder_python_equals_cli(cli, simulated_folder, tmp_path, spec):
+    cli_dir, py_dir = tmp_path / "cli", tmp_path / "py"
+    cli_dir.mkdir()
+    py_dir.mkdir()
+    run_cli(cli, "run", "--dataset", simulated_folder, "--filter", spec, "--out", cli_dir, *LIBRARY_BETA)
+
+    fractions = []
+    request = seif.RunRequest(str(simulated_folder), spec)
+    report = seif.run_dataset(request, str(py_dir), progress=fractions.append)
+    metrics = compare_outputs(cli_dir, py_dir)
+
+    # The report holds what metrics.json says.
+    assert report.output.steps == metrics["steps"] > 0
+    assert report.landmarks == metrics["landmarks"]
+    assert report.errors.ate == metrics["ate_rmse"]
+    assert report.errors.landmark == metrics["landmark_rmse"]
+    assert report.info.format == "mrclam"
+    # The progress callback ran (with the GIL re-acquired) and ended at 1.
+    assert fractions and fractions[-1] == pytest.approx(1.0)
+    assert all(0.0 <= f <= 1.0 for f in fractions)
+    # trajectory.tum = the report's trajectory (x, y columns).
+    tum = seif.read_tum(py_dir / "trajectory.tum")
+    np.testing.assert_array_equal(tum[:, 1:3], as_written(report.output.trajectory_array()[:, 1:3]))
+
+
+def test_stream_through_python_equals_cli_trajectory(cli, simulated_folder, tmp_path):
+    """Events read in Python, steps assembled and filtered in Python = the CLI's trajectory."""
+    run_cli(cli, "run", "--dataset", simulated_folder, "--filter", "seif", "--out", tmp_path)
+    source = seif.open_dataset(simulated_folder)
+    f = seif.make_filter("seif", source.info.start_pose, source.info.filter_config())
+    out = seif.run_filter(f, source)
+    tum = seif.read_tum(tmp_path / "trajectory.tum")
+    ours = out.trajectory_array()
+    assert tum.shape[0] == ours.shape[0]
+    np.testing.assert_array_equal(tum[:, 1:3], as_written(ours[:, 1:3]))
+    np.testing.assert_allclose(tum[:, 0], ours[:, 0], rtol=0, atol=5e-7)  # %.6f stamps
+    cli_map = seif.read_map_csv(tmp_path / "map.csv")
+    assert list(cli_map["id"].astype(int)) == f.landmark_ids()
+    for row in cli_map:
+        np.testing.assert_array_equal([row["x"], row["y"]], as_written(f.landmark(int(row["id"]))))
+
+
+def test_victoria_park_isam_python_equals_cli(cli, victoria_park_isam, tmp_path):
+    cli_dir, py_dir = tmp_path / "cli", tmp_path / "py"
+    cli_dir.mkdir()
+    py_dir.mkdir()
+    run_cli(cli, "run", "--dataset", victoria_park_isam, "--filter", "seif", "--out", cli_dir, *LIBRARY_BETA)
+    report = seif.run(victoria_park_isam, py_dir, filter="seif")
+    compare_outputs(cli_dir, py_dir)
+    assert report.info.format == "isam"
+    assert report.landmarks > 0

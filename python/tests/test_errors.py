@@ -1,0 +1,113 @@
+"""Every C++ error reaches Python as its seif.Error subclass with the library's message."""
+import numpy as np
+import pytest
+
+import seif
+from conftest import run_cli
+
+
+def test_hierarchy():
+    for cls in (seif.DataError, seif.NumericError, seif.InvalidArgument, seif.UnknownLandmark):
+        assert issubclass(cls, seif.Error)
+    assert issubclass(seif.Error, Exception)
+    assert issubclass(seif.InvalidArgument, ValueError)
+    assert issubclass(seif.UnknownLandmark, LookupError)
+
+
+@pytest.fixture
+def malformed_isam(tmp_path):
+    path = tmp_path / "bad.txt"
+    path.write_text("ODOMETRY 0 1 1.0 0.0 0.0 0.0001 0 0 4e-06 0 4e-06\n"
+                    "ODOMETRY 1 2 1.0 zero 0.0 0.0001 0 0 4e-06 0 4e-06\n")
+    return path
+
+
+def drain(source):
+    return sum(1 for _ in source)
+
+
+def test_malformed_file_is_data_error_naming_file_and_line(malformed_isam):
+    with pytest.raises(seif.DataError) as info:
+        drain(seif.open_dataset(malformed_isam, "isam"))
+    message = str(info.value)
+    assert message.startswith(f"{malformed_isam}:2: ")
+    assert info.value.file == str(malformed_isam)
+    assert info.value.line == 2
+
+
+def test_data_error_message_is_the_clis(cli, malformed_isam, tmp_path):
+    """The Python message is the C++ what() unchanged: the CLI prints the same text."""
+    with pytest.raises(seif.DataError) as info:
+        seif.run_dataset(seif.RunRequest(str(malformed_isam), "seif"), str(tmp_path))
+    proc = run_cli(cli, "run", "--dataset", malformed_isam, "--out", tmp_path, check=False)
+    assert proc.returncode == 2
+    assert str(info.value) in proc.stderr
+
+
+def test_bad_spec_is_invalid_argument():
+    with pytest.raises(seif.InvalidArgument, match="unknown filter 'kalman'"):
+        seif.make_filter("kalman", np.zeros(3))
+    with pytest.raises(seif.InvalidArgument, match="sparsify"):
+        seif.make_filter("seif:sparsify=never", np.zeros(3))
+    with pytest.raises(seif.InvalidArgument):
+        seif.parse_filter_spec("ekf:active=3")
+    with pytest.raises(seif.InvalidArgument):
+        seif.DatasetFormat("csv")
+
+
+def test_model_error_is_invalid_argument():
+    sensor = seif.RangeBearingModel(0.1, 0.1)
+    with pytest.raises(seif.InvalidArgument):
+        sensor.inverse(np.zeros(3), np.array([0.0, 0.3]))  # zero range
+    with pytest.raises(seif.InvalidArgument):
+        seif.VelocityModel(0.1, 0.1).linearize(np.zeros(3), seif.OdometryIncrement())  # not its input
+    with pytest.raises(seif.InvalidArgument):
+        seif.RangeBearingModel(np.array([[1.0, 0.0], [0.0, -1.0]]))  # noise not SPD
+
+
+@pytest.mark.parametrize("spec", ["ekf", "eif", "seif"])
+def test_unknown_landmark(spec):
+    f = seif.make_filter(spec, np.zeros(3))
+    f.update([seif.Observation(3, np.array([0.5, 0.2]))])
+    assert f.landmark_ids() == [3]
+    with pytest.raises(seif.UnknownLandmark) as info:
+        f.landmark(4)
+    assert "landmark 4" in str(info.value)
+    with pytest.raises(seif.UnknownLandmark):
+        f.landmark_covariance(4)
+    with pytest.raises(seif.UnknownLandmark):
+        f.predict_measurement(4)
+
+
+def test_failure_inside_a_run_is_numeric_error():
+    """A step that fails (a zero-range first sighting) is rethrown by the run loop as
+    NumericError naming the step."""
+    data = seif.Dataset()
+    good = seif.Step(1.0, seif.VelocityControl(0.1, 0.0, 1.0), [seif.Observation(1, np.array([1.0, 0.0]))])
+    bad = seif.Step(2.0, seif.VelocityControl(0.1, 0.0, 1.0), [seif.Observation(2, np.array([0.0, 0.0]))])
+    data.steps = [good, bad]
+    with pytest.raises(seif.NumericError, match="step 1"):
+        seif.run_filter(seif.make_filter("ekf", np.zeros(3)), data)
+
+
+def test_bad_world_config_is_invalid_argument():
+    config = seif.preset_config("paper")
+    config.steps = 0
+    with pytest.raises(seif.InvalidArgument):
+        seif.simulate(config)
+
+
+def test_exception_in_progress_callback_propagates(simulated_folder, tmp_path):
+    """A Python exception raised by a progress callback (called with the GIL re-acquired
+    from inside the GIL-released run) stops the run and reaches the caller unchanged."""
+    class Stop(Exception):
+        pass
+
+    def stop(*_):
+        raise Stop("stopped by the user")
+
+    with pytest.raises(Stop, match="stopped by the user"):
+        seif.run_dataset(seif.RunRequest(str(simulated_folder), "seif"), str(tmp_path), stop)
+    data, _ = seif.simulated_dataset("paper", steps=30)
+    with pytest.raises(Stop):
+        seif.run_filter(seif.make_filter("ekf", seif.start_pose(data)), data, stop)

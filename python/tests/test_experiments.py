@@ -1,0 +1,89 @@
+"""The experiments' library entry points from Python (GIL released, callbacks re-acquire)."""
+import json
+import threading
+
+import numpy as np
+import pytest
+
+import seif
+
+
+def test_paper_experiment_is_deterministic_and_matches_its_filters():
+    options = seif.PaperOptions()
+    options.steps = 120
+    options.extra = ["eif"]
+    names = [f.name for f in seif.paper_filters(options)]
+    a = seif.run_paper_experiment(4, options)
+    b = seif.run_paper_experiment(4, options)
+    assert [r.name for r in a.filters] == names
+    assert [r.mse for r in a.filters] == [r.mse for r in b.filters]
+    assert all(r.mapped > 0 and r.mse >= r.aligned_mse for r in a.filters)
+    summary = seif.summarize_paper_filter(0, [a, b])
+    assert summary.name == names[0] and summary.error.n == 2
+
+
+def test_paper_detail_filters_reproduce_the_run():
+    options = seif.PaperOptions()
+    options.steps = 80
+    run, detail = seif.run_paper_experiment_detail(2, options)
+    ekf = detail.filters[0]
+    assert ekf.name == "ekf"
+    world = seif.paper_world(2, options)
+    mse, count = seif.landmark_mse(ekf, world_truth(world))
+    assert count == run.filters[0].mapped
+    assert mse == run.filters[0].mse
+    # The same EKF rebuilt and stepped from Python gives the same map.
+    config = seif.FilterConfig()
+    config.noise = world.noise
+    mine = seif.make_filter("ekf", seif.start_pose(detail.data), config)
+    for step in detail.data.steps:
+        mine.step(step.u, step.observations)
+    np.testing.assert_array_equal(mine.mean(), ekf.mean())
+    snap = seif.snapshot_by_id(ekf)
+    assert snap.ids == sorted(ekf.landmark_ids())
+
+
+def world_truth(world):
+    return seif.simulate(world).landmarks
+
+
+def test_consistency_runs_on_threads_with_a_progress_callback():
+    options = seif.ConsistencyOptions()
+    options.world = seif.preset_config("paper", 20, 60, 1)
+    options.runs = 3
+    options.samples = 4
+    options.threads = 2
+    options.filters = [seif.parse_filter_spec("ekf"), seif.parse_filter_spec("seif")]
+    calls, threads = [], set()
+
+    def progress(done, total):
+        calls.append((done, total))
+        threads.add(threading.get_ident())
+
+    result = seif.run_consistency(options, progress)
+    assert result.runs == 3 and [f.name for f in result.filters] == ["ekf", "seif"]
+    assert sorted(calls)[-1] == (3, 3)
+    assert len(result.sample_steps) == 4
+    assert result.pose_band.lo < 3 < result.pose_band.hi
+    report = json.loads(seif.consistency_json(result, options))
+    assert report["runs"] == 3
+    assert "ekf" in seif.consistency_table(result)
+
+
+def test_bench_case_and_cost_model():
+    case = seif.BenchCase()
+    case.filter = "seif"
+    case.landmarks = 60
+    case.window = 10
+    m = seif.run_bench_case(case)
+    assert m.filter == "seif" and m.steps == 10 and m.map_last > 0
+    assert m.us_per_step_median > 0
+    assert seif.step_cost_exponent("ekf") == 2
+    assert seif.quantile([1.0, 2.0, 3.0], 0.5) == 2.0
+
+
+def test_stats_helpers():
+    s = seif.summarize([1.0, 2.0, 3.0, 4.0])
+    assert s.n == 4 and s.mean == 2.5 and s.median == 2.5
+    band = seif.nees_band95(50, 2)
+    assert band.lo < 2 < band.hi
