@@ -425,14 +425,15 @@ Marginal BatchMap::marginal(std::span<const int> landmarks, bool pose, MarginalM
   Eigen::Index r = 0;
   if (pose) {
     const Eigen::Index T = 3 * static_cast<Eigen::Index>(inputs_.size());
-    rows.insert(rows.end(), {T, T + 1, T + 2});
+    for (Eigen::Index i = 0; i < 3; ++i) rows.push_back(T + i);
     m.mean.head<3>() = solution_->poses.back();
     r = 3;
   }
   for (int id : landmarks) {
     const int slot = book_.require(id);
     const Eigen::Index l = landmarkVar(slot);
-    rows.insert(rows.end(), {l, l + 1});
+    rows.push_back(l);
+    rows.push_back(l + 1);
     m.mean.segment<2>(r) = solution_->landmarks[static_cast<std::size_t>(slot)];
     r += 2;
   }

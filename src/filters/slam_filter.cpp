@@ -53,7 +53,9 @@ PredictedMeasurement SlamFilter::predictMeasurement(int id, const MeasurementMod
 std::vector<Eigen::Index> SlamFilter::stateIndices(std::span<const int> slots, bool pose) {
   std::vector<Eigen::Index> rows;
   rows.reserve(3 + 2 * slots.size());
-  if (pose) rows.insert(rows.end(), {0, 1, 2});
+  if (pose) {
+    for (Eigen::Index i = 0; i < 3; ++i) rows.push_back(i);
+  }
   for (int s : slots) {
     rows.push_back(3 + 2 * static_cast<Eigen::Index>(s));
     rows.push_back(4 + 2 * static_cast<Eigen::Index>(s));

@@ -1,0 +1,223 @@
+// Marginal queries (SlamFilter::marginal, predictMeasurement) on every filter and mode
+// against the dense inverse of the information matrix; the information-form motion update
+// with a full 3x3 motion Jacobian against the EKF; update() all or nothing.
+#include "scenario.hpp"
+
+#include <seif/core/errors.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/filters/slam_filter.hpp>
+
+#include <Eigen/Eigenvalues>
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace seif;
+
+std::unique_ptr<SlamFilter> runFor(const std::string& spec, const test::Scenario& s, std::size_t steps) {
+  auto f = makeFilter(spec, s.start, test::configFor(s));
+  for (std::size_t k = 0; k < steps; ++k) f->step(s.steps[k].u, s.steps[k].observations);
+  f->finish();
+  return f;
+}
+
+/// Rows of the dense state for the pose and the landmarks `ids` (the filter's slot order).
+std::vector<Eigen::Index> rowsOf(const SlamFilter& f, const std::vector<int>& ids) {
+  std::vector<Eigen::Index> rows = {0, 1, 2};
+  const std::vector<int>& all = f.landmarkIds();
+  for (int id : ids) {
+    const auto slot = std::find(all.begin(), all.end(), id) - all.begin();
+    rows.push_back(3 + 2 * slot);
+    rows.push_back(4 + 2 * slot);
+  }
+  return rows;
+}
+
+/// Variables (block indices: 0 the robot, 1 + slot a landmark) linked to block v in H.
+std::vector<Eigen::Index> blanketRows(const Eigen::MatrixXd& H, const std::vector<Eigen::Index>& rows) {
+  const auto blockOf = [](Eigen::Index r) { return r < 3 ? Eigen::Index(0) : 1 + (r - 3) / 2; };
+  const auto rowsOfBlock = [](Eigen::Index b) {
+    return b == 0 ? std::vector<Eigen::Index>{0, 1, 2} : std::vector<Eigen::Index>{3 + 2 * (b - 1), 4 + 2 * (b - 1)};
+  };
+  const Eigen::Index blocks = 1 + (H.rows() - 3) / 2;
+  std::vector<bool> in(static_cast<std::size_t>(blocks), false);
+  for (Eigen::Index r : rows) in[static_cast<std::size_t>(blockOf(r))] = true;
+  std::vector<bool> blanket = in;
+  for (Eigen::Index a = 0; a < blocks; ++a) {
+    if (!in[static_cast<std::size_t>(a)]) continue;
+    for (Eigen::Index c = 0; c < blocks; ++c) {
+      for (Eigen::Index i : rowsOfBlock(a)) {
+        for (Eigen::Index j : rowsOfBlock(c)) {
+          if (H(i, j) != 0.0) blanket[static_cast<std::size_t>(c)] = true;
+        }
+      }
+    }
+  }
+  std::vector<Eigen::Index> out = rows;  // the queried rows first, then the rest of the blanket
+  for (Eigen::Index b = 0; b < blocks; ++b) {
+    if (!blanket[static_cast<std::size_t>(b)] || in[static_cast<std::size_t>(b)]) continue;
+    for (Eigen::Index r : rowsOfBlock(b)) out.push_back(r);
+  }
+  return out;
+}
+
+double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
+
+class MarginalsOfEveryFilter : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(MarginalsOfEveryFilter, ExactAndLocalAgreeWithTheDenseInverse) {
+  const test::Scenario s = test::makeScenario(7, 25, 120);
+  const auto f = runFor(GetParam(), s, 120);
+  ASSERT_GE(f->landmarkIds().size(), 4u);
+  const std::vector<int> ids = {f->landmarkIds()[0], f->landmarkIds()[3], f->landmarkIds().back()};
+  const std::vector<Eigen::Index> rows = rowsOf(*f, ids);
+  const Eigen::MatrixXd Sigma = f->covariance();
+  const Eigen::VectorXd mu = f->mean();
+
+  const Marginal exact = f->marginal(ids, true, MarginalMode::Exact);
+  EXPECT_EQ(exact.mean, mu(rows)) << GetParam();
+  EXPECT_LT(relDiff(exact.covariance, Sigma(rows, rows)), 1e-8) << GetParam();
+
+  const Marginal without_pose = f->marginal(ids, false, MarginalMode::Exact);
+  const std::vector<Eigen::Index> landmark_rows(rows.begin() + 3, rows.end());
+  EXPECT_LT(relDiff(without_pose.covariance, Sigma(landmark_rows, landmark_rows)), 1e-8) << GetParam();
+
+  const Marginal local = f->marginal(ids, true, MarginalMode::Local);
+  EXPECT_EQ(local.mean, exact.mean);
+  const std::string name = GetParam().substr(0, GetParam().find(':'));
+  if (name == "ekf" || name == "batch") {  // these hold the marginal itself in every mode
+    EXPECT_LT(relDiff(local.covariance, exact.covariance), 1e-12) << GetParam();
+  } else {
+    // The inverse of H restricted to the queried variables and their Markov blanket.
+    const Eigen::MatrixXd H = f->information();
+    const std::vector<Eigen::Index> blanket = blanketRows(H, rows);
+    const Eigen::MatrixXd restricted = H(blanket, blanket);
+    const Eigen::MatrixXd expected =
+        restricted.llt().solve(Eigen::MatrixXd::Identity(restricted.rows(), restricted.cols()))
+            .topLeftCorner(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(rows.size()));
+    EXPECT_LT(relDiff(local.covariance, expected), 1e-9) << GetParam();
+    // Conditioning on the rest never adds uncertainty: exact - local is positive semidefinite.
+    const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(exact.covariance - local.covariance).eigenvalues();
+    EXPECT_GE(ev.minCoeff(), -1e-9 * exact.covariance.norm()) << GetParam();
+  }
+  EXPECT_THROW(f->marginal(std::vector<int>{12345}, true, MarginalMode::Exact), UnknownLandmark);
+}
+
+TEST_P(MarginalsOfEveryFilter, PredictedMeasurementIsTheLinearisedJointMarginal) {
+  const test::Scenario s = test::makeScenario(11, 25, 80);
+  const auto f = runFor(GetParam(), s, 80);
+  const int id = f->landmarkIds()[1];
+  const Mat2 R = f->sensorModel().noise();
+  const std::vector<Eigen::Index> rows = rowsOf(*f, {id});
+  const Eigen::VectorXd mu = f->mean();
+  const Eigen::MatrixXd P = f->covariance()(rows, rows);
+  Mat23 J_x;
+  Mat2 J_y;
+  const Vec2 z = f->sensorModel().predict(mu.head<3>(), mu(rows).tail<2>(), &J_x, &J_y);
+  Eigen::Matrix<double, 2, 5> J;
+  J << J_x, J_y;
+  const Mat2 S = J * P * J.transpose() + R;
+  for (MarginalMode mode : {MarginalMode::Exact, MarginalMode::Local}) {
+    const PredictedMeasurement p = f->predictMeasurement(id, f->sensorModel(), R, mode);
+    EXPECT_LT((p.z - z).norm(), 1e-12 * (1 + z.norm())) << GetParam();
+    EXPECT_EQ(p.S, p.S.transpose());
+    EXPECT_GT(p.S.determinant(), 0.0);
+    if (mode == MarginalMode::Exact) EXPECT_LT(relDiff(p.S, S), 1e-8) << GetParam();
+    // Local: S from an overconfident marginal, but never below the sensor noise.
+    if (mode == MarginalMode::Local) EXPECT_GE((p.S - R).eigenvalues().real().minCoeff(), -1e-12) << GetParam();
+  }
+  EXPECT_THROW(f->predictMeasurement(-7, f->sensorModel(), R), UnknownLandmark);
+}
+
+INSTANTIATE_TEST_SUITE_P(Filters, MarginalsOfEveryFilter,
+                         ::testing::Values("ekf", "eif", "seif", "seif:mean=exact", "seif:sparsify=eseif,beta=4",
+                                           "seif:covariance=local", "batch"),
+                         [](const auto& info) {
+                           std::string n = info.param;
+                           for (char& c : n) {
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           }
+                           return n;
+                         });
+
+TEST(GeneralMotionJacobian, InformationFiltersAgreeWithTheEkfForAFullJacobian) {
+  // A made-up linearised motion with every entry of dDelta/dx non-zero: nothing in the
+  // information form may assume the planar models' heading-only Jacobian.
+  const test::Scenario s = test::makeScenario(3, 12, 60);
+  auto ekf = makeFilter("ekf", s.start, test::configFor(s));
+  auto eif = makeFilter("eif", s.start, test::configFor(s));
+  auto seif = makeFilter("seif:mean=exact,active=30", s.start, test::configFor(s));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-0.2, 0.2);
+  for (std::size_t k = 0; k < s.steps.size(); ++k) {
+    MotionIncrement m;
+    m.delta = Vec3(0.3 + u(rng), u(rng), u(rng));
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) m.J_delta_x(i, j) = u(rng);
+    }
+    Mat3 A = Mat3::Random() * 0.05;
+    m.U = A * A.transpose() + 1e-4 * Mat3::Identity();
+    for (SlamFilter* f : {ekf.get(), eif.get(), seif.get()}) {
+      f->predict(m);
+      f->update(s.steps[k].observations);
+    }
+  }
+  const Eigen::MatrixXd P = ekf->covariance();
+  EXPECT_LT((eif->mean() - ekf->mean()).norm(), 1e-8 * ekf->mean().norm());
+  EXPECT_LT(relDiff(eif->covariance(), P), 1e-7);
+  EXPECT_LT((seif->mean() - ekf->mean()).norm(), 1e-8 * ekf->mean().norm());
+  EXPECT_LT(relDiff(seif->covariance(), P), 1e-7);
+}
+
+TEST(GeneralMotionJacobian, ASingularJacobianIsANumericError) {
+  const test::Scenario s = test::makeScenario(3, 5, 5);
+  auto eif = makeFilter("eif", s.start, test::configFor(s));
+  MotionIncrement m;
+  m.J_delta_x = -Mat3::Identity();  // G = I + J = 0
+  m.U = 1e-4 * Mat3::Identity();
+  EXPECT_THROW(eif->predict(m), NumericError);
+}
+
+class UpdateIsAllOrNothing : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(UpdateIsAllOrNothing, ABadObservationLeavesTheFilterAsItWas) {
+  const test::Scenario s = test::makeScenario(2, 20, 40);
+  auto f = runFor(GetParam(), s, 40);
+  const Eigen::VectorXd mu = f->mean();
+  const Eigen::MatrixXd H = f->information();
+  const std::vector<int> ids = f->landmarkIds();
+  const std::size_t rejected = f->rejectedObservations();
+  const Observation known{ids[0], Vec2(1.0, 0.1), std::nullopt};
+  const Observation fresh{999, Vec2(1.0, 0.2), std::nullopt};
+  const std::vector<std::vector<Observation>> bad = {
+      {known, fresh, Observation{-1, Vec2(1.0, 0.0), std::nullopt}},                  // no id
+      {fresh, known, Observation{ids[1], Vec2(std::nan(""), 0.0), std::nullopt}},     // NaN
+      {known, Observation{ids[1], Vec2(1.0, 0.0), Mat2::Constant(std::numeric_limits<double>::infinity())}},
+  };
+  for (const auto& z : bad) {
+    EXPECT_THROW(f->update(z), ModelError) << GetParam();
+    EXPECT_EQ(f->mean(), mu) << GetParam();
+    EXPECT_EQ(f->information(), H) << GetParam();
+    EXPECT_EQ(f->landmarkIds(), ids) << GetParam();
+    EXPECT_EQ(f->rejectedObservations(), rejected) << GetParam();
+  }
+  f->update(std::vector<Observation>{known, fresh});  // and it goes on
+  EXPECT_TRUE(f->hasLandmark(999));
+}
+
+INSTANTIATE_TEST_SUITE_P(Filters, UpdateIsAllOrNothing,
+                         ::testing::Values("ekf", "eif", "seif", "seif:sparsify=eseif,beta=4"),
+                         [](const auto& info) {
+                           std::string n = info.param;
+                           for (char& c : n) {
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           }
+                           return n;
+                         });
+
+}  // namespace
