@@ -222,7 +222,7 @@ void fillTables(const PaperReport& report, PaperTables& t) {
   t.notes << "Final error: mean over the mapped landmarks of the squared position error after the "
            "last update [m^2], averaged over runs (shown in 10^-3 m^2); 95% CI = t(0.975, n-1) "
            "s / sqrt(n). The paper does not define its error; this definition matches the "
-           "magnitude of its t.table. Same data for all filters in a run.\n";
+           "magnitude of its table. Same data for all filters in a run.\n";
   t.notes << "RMS landmark error [m] (sqrt of each run's value, averaged):";
   for (std::size_t f = 0; f < 3; ++f) {
     t.notes << (f ? ", " : " ") << sums[f].name << " " << fmt("%.4f", sums[f].rms.mean) << " ± "
@@ -480,8 +480,8 @@ void writePaperResults(const PaperReport& report, const std::filesystem::path& d
       j["runs_all_landmarks_mapped"] = t.all_mapped;
       j["runs_links_full_graph"] = t.ekf_dense;
       if (t.all_mapped > 0) {
-        j["links_when_t.all_mapped_min"] = t.ekf_links_all_min;
-        j["links_when_t.all_mapped_max"] = t.ekf_links_all_max;
+        j["links_when_all_mapped_min"] = t.ekf_links_all_min;
+        j["links_when_all_mapped_max"] = t.ekf_links_all_max;
       }
     } else {
       j["seif"] = toJson(spec.seif);
