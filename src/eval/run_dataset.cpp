@@ -140,6 +140,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   writeTum(out / "trajectory.tum", report.output.trajectory);
   writeTum(out / "dead_reckoning.tum", report.output.dead_reckoning);
   writeMapCsv(out / "map.csv", *filter, request.map_covariances);  // marginals computed here
+  if (!report.output.gps.empty()) writeGpsCsv(out / "gps.csv", report.output.gps);  // for `seif plot`
   if (request.trajectory_covariances) {
     writeTrajectoryCovariance(out / "trajectory_cov.csv", report.output.trajectory, report.output.pose_covariances);
   }
