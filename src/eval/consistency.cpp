@@ -4,6 +4,7 @@
 #include <seif/eval/parallel.hpp>
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_loop.hpp>
+#include <seif/io/atomic_file.hpp>
 
 #include "json_fields.hpp"
 
@@ -287,6 +288,20 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
   return j.dump(2);
 }
 
+std::string consistencyCsv(const ConsistencyResult& r) {
+  std::ostringstream csv;
+  csv.precision(10);
+  csv << "filter,step,pose,landmark,pose_relative,landmark_relative\n";
+  for (const ConsistencyFilterResult& f : r.filters) {
+    for (std::size_t s = 0; s < r.sample_steps.size(); ++s) {
+      const NeesPoint& p = f.nees[s];
+      csv << '"' << f.name << "\"," << r.sample_steps[s] << ',' << p.pose << ',' << p.landmark << ','
+          << p.pose_relative << ',' << p.landmark_relative << '\n';
+    }
+  }
+  return csv.str();
+}
+
 std::string consistencyTable(const ConsistencyResult& result) {
   const ConsistencyFilterResult* reference = nullptr;
   for (const ConsistencyFilterResult& f : result.filters) {
@@ -324,6 +339,13 @@ std::string consistencyTable(const ConsistencyResult& result) {
     << "] (3 dof), landmark [" << cell(result.landmark_band.lo, 2) << ", " << cell(result.landmark_band.hi, 2)
     << "] (2 dof, each landmark's NEES averaged over the map first).\n";
   return t.str();
+}
+
+void writeConsistencyResults(const ConsistencyResult& result, const ConsistencyOptions& options,
+                             const std::filesystem::path& dir) {
+  writeFileAtomically(dir / "nees.json", consistencyJson(result, options) + "\n");
+  writeFileAtomically(dir / "nees.csv", consistencyCsv(result));
+  writeFileAtomically(dir / "table.md", consistencyTable(result));
 }
 
 }  // namespace seif
