@@ -341,21 +341,20 @@ void fillTables(const PaperReport& report, PaperTables& t) {
 std::string paperSummaryText(const PaperReport& report) {
   PaperTables t;
   fillTables(report, t);
-  std::string text = "\n" + t.table.text() + "\n" + t.notes.str();
+  std::ostringstream text;
+  text << "\n" << t.table.text() << "\n" << t.notes.str();
   if (!report.request.options.sweep_active.empty()) {
-    char head[256];
-    std::snprintf(head, sizeof head,
-                  "\nConstant-time SEIF against theta_x (K = %d; the journal version, N = 50: error / "
-                  "EKF 1.521 at theta_x = 6, 1.110 at 10, the latter at 1/6 of the EKF's time):\n",
-                  report.request.options.relax);
-    text += head + t.sweep.text();
+    text << "\nConstant-time SEIF against theta_x (K = " << report.request.options.relax
+         << "; the journal version, N = 50: error / EKF 1.521 at theta_x = 6, 1.110 at 10, the latter at 1/6 of "
+            "the EKF's time):\n"
+         << t.sweep.text();
   }
   if (!report.request.options.extra.empty()) {
-    text += "\nBeyond the paper, same runs (NEES: e^T P^-1 e with the filter's own covariance after the "
-            "last update; a consistent filter has 2 per landmark, 3 for the pose):\n" +
-            t.beyond.text();
+    text << "\nBeyond the paper, same runs (NEES: e^T P^-1 e with the filter's own covariance after the last "
+            "update; a consistent filter has 2 per landmark, 3 for the pose):\n"
+         << t.beyond.text();
   }
-  return text;
+  return text.str();
 }
 
 void writePaperResults(const PaperReport& report, const std::filesystem::path& dir) {

@@ -1,8 +1,9 @@
 #pragma once
-// Runs a filter over a dataset and measures it: the one loop behind `seif run`,
-// `seif paper` and `seif bench`. A dataset comes either in memory (Dataset: the simulator's
-// worlds) or as a stream of events (EventSource: every reader); StepAssembler turns events
-// into filter steps, and the run never holds the observations of more than one step.
+// Runs a filter over a dataset and measures it: runFilter() is the run loop (run_loop.hpp)
+// with the observers that record a RunOutput, behind `seif run` and `seif paper`. A dataset
+// comes either in memory (Dataset: the simulator's worlds) or as a stream of events
+// (EventSource: every reader); StepAssembler (step_assembler.hpp) turns events into filter
+// steps, and the run never holds the observations of more than one step.
 #include <seif/filters/slam_filter.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/io/event_source.hpp>
