@@ -6,6 +6,10 @@
 #include <seif/eval/stats.hpp>
 
 #include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdint>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -129,6 +133,51 @@ TEST(PaperExperiment, OneRunIsDeterministicAndConsistent) {
   EXPECT_LT(a.filters[2].stats.links, a.filters[0].stats.links);
   const seif::PaperRun other = seif::runPaperExperiment(4, options);
   EXPECT_NE(other.filters[0].mse, a.filters[0].mse);
+}
+
+TEST(PaperStudy, RunPaperIsItsRunsWhateverTheThreadsAndWritesItsFiles) {
+  seif::PaperRequest request;
+  request.runs = 3;
+  request.seed = 11;
+  request.options.steps = 120;
+  request.jobs = 1;
+  const seif::PaperReport one = seif::runPaper(request);
+  request.jobs = 2;
+  const seif::PaperReport two = seif::runPaper(request);
+  ASSERT_EQ(one.runs.size(), 3u);
+  ASSERT_EQ(two.runs.size(), 3u);
+  EXPECT_EQ(two.jobs, 2u);
+  for (std::size_t r = 0; r < one.runs.size(); ++r) {
+    const seif::PaperRun alone = seif::runPaperExperiment(request.seed + r, request.options);
+    EXPECT_EQ(one.runs[r].seed, request.seed + r);
+    for (std::size_t f = 0; f < alone.filters.size(); ++f) {
+      EXPECT_EQ(one.runs[r].filters[f].mse, alone.filters[f].mse);
+      EXPECT_EQ(two.runs[r].filters[f].mse, alone.filters[f].mse);
+      EXPECT_EQ(two.runs[r].filters[f].stats.links, alone.filters[f].stats.links);
+    }
+  }
+  for (std::size_t f = 0; f < one.summaries.size(); ++f) {
+    EXPECT_EQ(one.summaries[f].error.mean, two.summaries[f].error.mean);
+    EXPECT_EQ(one.summaries[f].ratio, two.summaries[f].ratio);
+  }
+  EXPECT_EQ(one.typical, two.typical);
+  EXPECT_EQ(one.typical_detail.filters.size(), 3u);
+  EXPECT_NE(seif::paperSummaryText(one).find("SEIF (constant time)"), std::string::npos);
+
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("seif-test-paper-study-" + std::to_string(::getpid()));
+  seif::writePaperResults(one, dir);
+  for (const char* file : {"results.json", "table.md", "figure_data/ekf.json", "figure_data/seif.json",
+                           "figure_data/seif_exact.json"}) {
+    EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
+  }
+  std::filesystem::remove_all(dir);
+
+  request.runs = 0;
+  EXPECT_THROW(seif::runPaper(request), seif::InvalidArgument);
+  request.runs = 2;
+  request.seed = UINT64_MAX;
+  EXPECT_THROW(seif::checkPaperRequest(request), seif::InvalidArgument);
 }
 
 TEST(PaperExperiment, SnapshotOrdersByIdAndListsLinks) {

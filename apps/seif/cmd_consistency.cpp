@@ -1,16 +1,15 @@
 // seif consistency: Monte-Carlo NEES of any set of filters on a simulator preset
-// (flags -> ConsistencyOptions -> runConsistency; eval/consistency.hpp).
+// (flags -> ConsistencyOptions -> runConsistency -> print, writeConsistencyResults;
+// eval/consistency.hpp).
 #include "commands.hpp"
 #include "options.hpp"
 
 #include <seif/eval/consistency.hpp>
-#include <seif/io/atomic_file.hpp>
 
 #include <climits>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <sstream>
 
 namespace seif::cli {
 namespace {
@@ -28,21 +27,6 @@ struct ConsistencyArgs {
   std::string out = "out/consistency";
   bool no_figures = false;
 };
-
-/// nees.csv: one row per filter and sample step, the NEES series of the figures.
-std::string neesCsv(const ConsistencyResult& r) {
-  std::ostringstream csv;
-  csv.precision(10);
-  csv << "filter,step,pose,landmark,pose_relative,landmark_relative\n";
-  for (const ConsistencyFilterResult& f : r.filters) {
-    for (std::size_t s = 0; s < r.sample_steps.size(); ++s) {
-      const NeesPoint& p = f.nees[s];
-      csv << '"' << f.name << "\"," << r.sample_steps[s] << ',' << p.pose << ',' << p.landmark << ','
-          << p.pose_relative << ',' << p.landmark_relative << '\n';
-    }
-  }
-  return csv.str();
-}
 
 void consistencyCommand(const ConsistencyArgs& args) {
   ConsistencyOptions options;
@@ -67,9 +51,7 @@ void consistencyCommand(const ConsistencyArgs& args) {
   }
   const std::string table = consistencyTable(result);
   std::printf("\n%s", table.c_str());
-  writeFileAtomically((dir / "nees.json").string(), consistencyJson(result, options) + "\n");
-  writeFileAtomically((dir / "nees.csv").string(), neesCsv(result));
-  writeFileAtomically((dir / "table.md").string(), table);
+  writeConsistencyResults(result, options, dir);
   std::printf("\nwrote %s/nees.json, nees.csv, table.md\n", args.out.c_str());
   if (!args.no_figures && renderFigure("consistency.py", {dir.string()})) {
     std::printf("figures: %s/nees_global.png, %s/nees_relative.png\n", args.out.c_str(), args.out.c_str());

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
       "Typical use:\n"
       "  seif simulate --preset paper --seed 1 --out world       # a simulated dataset\n"
       "  seif run --dataset world --filter seif --out result      # run a filter on it\n"
+      "  seif plot result                                         # draw it: result/map.png\n"
       "  seif run --dataset ../shared/data/mrclam/MRCLAM_Dataset6 --robot 3 --filter ekf --out r3\n"
       "  seif run --dataset ../shared/data/victoria-park --filter seif --out vp\n"
       "  seif convert ../shared/data/victoria-park-isam/victoria_park.txt --to g2o --out vp.g2o\n"
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
   addPaperCommand(app);
   addConvertCommand(app);
   addConsistencyCommand(app);
+  addPlotCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

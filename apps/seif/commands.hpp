@@ -18,5 +18,6 @@ void addBenchCommand(CLI::App& app);
 void addPaperCommand(CLI::App& app);
 void addConvertCommand(CLI::App& app);
 void addConsistencyCommand(CLI::App& app);
+void addPlotCommand(CLI::App& app);
 
 }  // namespace seif::cli

@@ -187,23 +187,6 @@ SeifOptions SeifFlags::resolve() const {
   return o;
 }
 
-nlohmann::json toJson(const NoiseModel& n) {
-  return {{"sigma_v", n.sigma_v},
-          {"sigma_w", n.sigma_w},
-          {"sigma_range", n.sigma_range},
-          {"sigma_bearing", n.sigma_bearing}};
-}
-
-nlohmann::json toJson(const SeifOptions& o) { return nlohmann::json::parse(seifOptionsJson(o)); }
-
-nlohmann::json toJson(const FilterStats& s) {
-  return {{"landmarks", s.landmarks},
-          {"links", s.links},
-          {"robot_links", s.robot_links},
-          {"max_landmark_links", s.max_landmark_links},
-          {"blocks_touched", s.blocks_touched}};
-}
-
 Progress::Progress(std::string label) : label_(std::move(label)), tty_(isatty(STDERR_FILENO) != 0) {}
 
 void Progress::operator()(std::size_t done, std::size_t total) {
@@ -274,8 +257,5 @@ bool renderFigure(const std::string& script, const std::vector<std::string>& arg
   return true;
 }
 
-void writeJson(const std::string& file, const nlohmann::json& j) {
-  writeFileAtomically(file, j.dump(2) + "\n");
-}
 
 }  // namespace seif::cli

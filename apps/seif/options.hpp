@@ -67,10 +67,6 @@ struct SeifFlags {
   SeifOptions resolve() const;
 };
 
-nlohmann::json toJson(const NoiseModel& noise);
-nlohmann::json toJson(const SeifOptions& options);
-nlohmann::json toJson(const FilterStats& stats);
-
 /// A progress bar on stderr when it is a terminal; silent otherwise.
 class Progress {
  public:
@@ -90,7 +86,5 @@ class Progress {
 /// Returns whether the script ran and succeeded.
 bool renderFigure(const std::string& script, const std::vector<std::string>& args);
 
-/// Writes `j` (pretty-printed) to `file`, creating its folder.
-void writeJson(const std::string& file, const nlohmann::json& j);
 
 }  // namespace seif::cli

@@ -3,8 +3,8 @@
 //     seif.DataError                seif::DataError (malformed input: "file:line: what"),
 //                                   with .file and .line
 //     seif.NumericError             seif::NumericError (a numerical failure in a filter)
-//     seif.InvalidArgument          seif::ModelError and std::invalid_argument (also a ValueError)
-//     seif.UnknownLandmark          std::out_of_range (a landmark id not in the map; also a LookupError)
+//     seif.InvalidArgument          seif::InvalidArgument, seif::ModelError (also a ValueError)
+//     seif.UnknownLandmark          seif::UnknownLandmark (a landmark id not in the map; also a LookupError)
 // str(exception) is the C++ what() unchanged. Anything else keeps pybind11's default
 // translation (std::runtime_error -> RuntimeError, ...).
 #include "bindings.hpp"
@@ -39,8 +39,8 @@ void raise(PyObject* type, const char* what, std::initializer_list<std::pair<con
   PyErr_SetObject(type, instance.ptr());
 }
 
-/// The one translator: C++ exception -> seif.Error subclass, message unchanged. When main's
-/// common base seif::Error arrives, add its catch after the specific ones here.
+/// The one translator: C++ exception (seif::Error and its subclasses) -> seif.Error
+/// subclass, message unchanged.
 void translate(std::exception_ptr p) {
   try {
     std::rethrow_exception(p);
@@ -48,10 +48,14 @@ void translate(std::exception_ptr p) {
     raise(g_data_error, e.what(), {{"file", py::str(e.file())}, {"line", py::int_(e.line())}});
   } catch (const NumericError& e) {
     raise(g_numeric_error, e.what());
-  } catch (const std::invalid_argument& e) {  // ModelError included
+  } catch (const InvalidArgument& e) {  // ModelError included
     raise(g_invalid_argument, e.what());
-  } catch (const std::out_of_range& e) {
-    raise(g_unknown_landmark, e.what());
+  } catch (const UnknownLandmark& e) {
+    raise(g_unknown_landmark, e.what(), {{"id", py::int_(e.id())}});
+  } catch (const Error& e) {
+    raise(g_error, e.what());
+  } catch (const std::invalid_argument& e) {  // from pybind11's own argument conversions
+    raise(g_invalid_argument, e.what());
   }
 }
 
@@ -70,11 +74,11 @@ void bindErrors(py::module_& m) {
       "A numerical failure inside a filter (seif::NumericError), naming the step and landmark.");
   g_invalid_argument = newException(
       m, "InvalidArgument", py::make_tuple(base, py::handle(PyExc_ValueError)),
-      "An invalid argument (seif::ModelError, std::invalid_argument): a bad filter spec, "
+      "An invalid argument (seif::InvalidArgument, seif::ModelError): a bad filter spec, "
       "option name, model parameter or input type. Also a ValueError.");
   g_unknown_landmark = newException(
       m, "UnknownLandmark", py::make_tuple(base, py::handle(PyExc_LookupError)),
-      "A landmark id that is not in the filter's map (std::out_of_range). Also a LookupError.");
+      "A landmark id that is not in the filter's map (seif::UnknownLandmark; attribute `id`). Also a LookupError.");
   py::register_exception_translator(&translate);
 }
 

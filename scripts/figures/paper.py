@@ -102,6 +102,8 @@ def map_panel(ax, d, title):
     ax.set_ylim(-0.05, 1.05)
     ax.set_aspect("equal")
     ax.set_title(title, fontsize=9)
+    ax.set_xlabel("x [m]", fontsize=8)
+    ax.set_ylabel("y [m]", fontsize=8)
     ax.tick_params(labelsize=7)
 
 
@@ -132,6 +134,8 @@ def links_panel(ax, d, title):
     ax.set_ylim(-0.05, 1.05)
     ax.set_aspect("equal")
     ax.set_title(title, fontsize=9)
+    ax.set_xlabel("x [m]", fontsize=8)
+    ax.set_ylabel("y [m]", fontsize=8)
     ax.tick_params(labelsize=7)
 
 

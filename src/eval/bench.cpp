@@ -1,6 +1,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/bench.hpp>
 #include <seif/eval/run.hpp>
+#include <seif/eval/run_loop.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/sim/world.hpp>
 
@@ -26,6 +27,30 @@ void trimHeap() {
   malloc_trim(0);
 #endif
 }
+
+/// Times the steps from `first` on (the window) and reads the map and link counts there.
+class WindowTimer : public RunObserver {
+ public:
+  WindowTimer(std::size_t first, BenchMeasurement& m, std::vector<double>& us, std::size_t& observations)
+      : first_(first), m_(m), us_(us), observations_(observations) {}
+  void onStart(const SlamFilter& filter, double) override {
+    if (first_ == 0) m_.map_first = filter.landmarkIds().size();
+  }
+  void afterUpdate(const SlamFilter& filter, const Step& step, std::size_t k, double seconds) override {
+    if (k + 1 == first_) m_.map_first = filter.landmarkIds().size();  // before the window's first step
+    if (k < first_) return;
+    us_.push_back(1e6 * seconds);
+    observations_ += step.observations.size();
+    m_.max_blocks_touched = std::max(m_.max_blocks_touched, filter.blocksTouched());
+    m_.max_robot_links = std::max(m_.max_robot_links, filter.robotLinks());
+  }
+
+ private:
+  std::size_t first_;
+  BenchMeasurement& m_;
+  std::vector<double>& us_;
+  std::size_t& observations_;
+};
 
 }  // namespace
 
@@ -100,26 +125,12 @@ BenchMeasurement runBenchCase(const BenchCase& c) {
   std::size_t observations = 0;
 
   auto filter = makeFilter(c.filter, start, config, c.seif);
+  WindowTimer timer(first, m, us, observations);
   const auto t_run = Clock::now();
-  for (std::size_t k = 0; k < total; ++k) {
-    const Step& step = data.steps[k];
-    if (k == first) m.map_first = filter->landmarkIds().size();
-    const auto t0 = Clock::now();
-    try {
-      filter->step(step.u, step.observations);
-    } catch (const std::exception& e) {
-      std::ostringstream msg;
-      msg << c.filter << " on the corridor of " << c.landmarks << " landmarks: step " << k << ": "
-          << e.what();
-      throw NumericError(msg.str());
-    }
-    const auto t1 = Clock::now();
-    if (k >= first) {
-      us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
-      observations += step.observations.size();
-      m.max_blocks_touched = std::max(m.max_blocks_touched, filter->blocksTouched());
-      m.max_robot_links = std::max(m.max_robot_links, filter->robotLinks());
-    }
+  try {
+    runLoop(*filter, data, {&timer});
+  } catch (const std::exception& e) {
+    throw NumericError(c.filter + " on the corridor of " + std::to_string(c.landmarks) + " landmarks: " + e.what());
   }
   m.run_seconds = std::chrono::duration<double>(Clock::now() - t_run).count();
   m.steps = us.size();

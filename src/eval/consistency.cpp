@@ -1,21 +1,20 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
 #include <seif/eval/consistency.hpp>
+#include <seif/eval/parallel.hpp>
 #include <seif/eval/run.hpp>
+#include <seif/eval/run_loop.hpp>
+#include <seif/io/atomic_file.hpp>
 
-#include <nlohmann/json.hpp>
+#include "json_fields.hpp"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <limits>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 
 namespace seif {
 namespace {
@@ -45,6 +44,34 @@ std::vector<std::size_t> sampleSteps(std::size_t steps, int samples) {
   return at;
 }
 
+/// Measures the NEES after each sample step: during the run for a filter, after finish()
+/// (the last sample) for a smoother, whose estimates before it are only its initial guess.
+class NeesSampler : public RunObserver {
+ public:
+  NeesSampler(const Dataset& data, const std::vector<std::size_t>& samples, FilterRun& out)
+      : data_(data), samples_(samples), out_(out) {}
+  void afterUpdate(const SlamFilter& filter, const Step& step, std::size_t k, double seconds) override {
+    out_.seconds += seconds;
+    if (next_ >= samples_.size() || samples_[next_] != k + 1) return;
+    if (k + 1 == data_.steps.size()) return;  // the last sample: after finish()
+    if (!filter.smoother()) measure(filter, step.time);
+    ++next_;
+  }
+  void onFinish(const SlamFilter& filter, double seconds) override {
+    out_.seconds += seconds;
+    if (next_ < samples_.size() && samples_[next_] == data_.steps.size()) measure(filter, data_.steps.back().time);
+  }
+
+ private:
+  void measure(const SlamFilter& filter, double time) {
+    out_.nees[next_] = measureNees(filter, interpolatePose(data_.groundtruth, time), data_.landmarks);
+  }
+  const Dataset& data_;
+  const std::vector<std::size_t>& samples_;
+  FilterRun& out_;
+  std::size_t next_ = 0;
+};
+
 FilterRun runOne(const FilterSpec& spec, const Dataset& data, const FilterConfig& config, const Pose2& start,
                  const std::vector<std::size_t>& samples, std::uint64_t seed) {
   FilterSpec s = spec;
@@ -52,21 +79,8 @@ FilterRun runOne(const FilterSpec& spec, const Dataset& data, const FilterConfig
   std::unique_ptr<SlamFilter> filter = makeFilter(s, start, config);
   FilterRun out;
   out.nees.assign(samples.size(), NeesPoint{kNaN, kNaN, kNaN, kNaN});
-  const auto t0 = std::chrono::steady_clock::now();
-  std::size_t next = 0;
-  for (std::size_t k = 0; k < data.steps.size(); ++k) {
-    filter->step(data.steps[k].u, data.steps[k].observations);
-    if (next < samples.size() && samples[next] == k + 1) {
-      const bool last = k + 1 == data.steps.size();
-      if (last) filter->finish();
-      if (last || !filter->smoother()) {
-        const Pose2 truth = interpolatePose(data.groundtruth, data.steps[k].time);
-        out.nees[next] = measureNees(*filter, truth, data.landmarks);
-      }
-      ++next;
-    }
-  }
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  NeesSampler sampler(data, samples, out);
+  runLoop(*filter, data, {&sampler});
   std::vector<Vec2> est, ref;
   for (int id : filter->landmarkIds()) {
     if (const auto it = data.landmarks.find(id); it != data.landmarks.end()) {
@@ -106,8 +120,6 @@ NeesPoint meanPoint(const std::vector<NeesPoint>& points) {
   }
   return {finiteMean(a), finiteMean(b), finiteMean(c), finiteMean(d)};
 }
-
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 }  // namespace
 
@@ -171,50 +183,25 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
   const std::size_t nf = options.filters.size();
   std::vector<std::vector<FilterRun>> results(runs);  // [run][filter]
   std::vector<std::size_t> steps_of_run(runs, 0);
-  std::atomic<std::size_t> next{0}, done{0};
-  std::mutex progress_mutex;
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-
-  auto worker = [&] {
-    for (std::size_t r = next++; r < runs; r = next++) {
+  auto runFilters = [&](std::size_t r) {
+    WorldConfig world = options.world;
+    world.seed = options.world.seed + r;
+    const Dataset data = buildDataset(simulate(world));
+    FilterConfig config;
+    config.noise = data.noise.value_or(world.noise);
+    const Pose2 start = startPose(data);
+    const std::vector<std::size_t> samples = sampleSteps(data.steps.size(), options.samples);
+    steps_of_run[r] = data.steps.size();
+    for (const FilterSpec& spec : options.filters) {
       try {
-        WorldConfig world = options.world;
-        world.seed = options.world.seed + r;
-        const Dataset data = buildDataset(simulate(world));
-        FilterConfig config;
-        config.noise = data.noise.value_or(world.noise);
-        const Pose2 start = startPose(data);
-        const std::vector<std::size_t> samples = sampleSteps(data.steps.size(), options.samples);
-        steps_of_run[r] = data.steps.size();
-        for (const FilterSpec& spec : options.filters) {
-          try {
-            results[r].push_back(runOne(spec, data, config, start, samples, world.seed));
-          } catch (const std::exception& e) {
-            throw NumericError("consistency: run with seed " + std::to_string(world.seed) + ", filter " +
-                               spec.text + ": " + e.what());
-          }
-        }
-      } catch (...) {
-        const std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-        next = runs;  // stop the others early
-        return;
-      }
-      const std::size_t d = ++done;
-      if (progress) {
-        const std::lock_guard<std::mutex> lock(progress_mutex);
-        progress(d, runs);
+        results[r].push_back(runOne(spec, data, config, start, samples, world.seed));
+      } catch (const std::exception& e) {
+        throw NumericError("consistency: run with seed " + std::to_string(world.seed) + ", filter " + spec.text +
+                           ": " + e.what());
       }
     }
   };
-  unsigned threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
-  threads = std::min<unsigned>(threads, static_cast<unsigned>(runs));
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  parallelFor(runs, options.threads, runFilters, progress);
 
   ConsistencyResult result;
   result.runs = options.runs;
@@ -264,20 +251,20 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
                              {"pose_relative", nlohmann::json::array()},
                              {"landmark_relative", nlohmann::json::array()}};
     for (const NeesPoint& p : f.nees) {
-      series["pose"].push_back(number(p.pose));
-      series["landmark"].push_back(number(p.landmark));
-      series["pose_relative"].push_back(number(p.pose_relative));
-      series["landmark_relative"].push_back(number(p.landmark_relative));
+      series["pose"].push_back(finiteOrNull(p.pose));
+      series["landmark"].push_back(finiteOrNull(p.landmark));
+      series["pose_relative"].push_back(finiteOrNull(p.pose_relative));
+      series["landmark_relative"].push_back(finiteOrNull(p.landmark_relative));
     }
     filters.push_back({{"name", f.name},
-                       {"pose_nees_final", number(f.nees_final.pose)},
-                       {"landmark_nees_final", number(f.nees_final.landmark)},
-                       {"pose_nees_relative_final", number(f.nees_final.pose_relative)},
-                       {"landmark_nees_relative_final", number(f.nees_final.landmark_relative)},
-                       {"error_final", number(f.error_final)},
-                       {"error_aligned_final", number(f.error_aligned_final)},
-                       {"mse_final", number(f.mse_final)},
-                       {"mse_aligned_final", number(f.mse_aligned_final)},
+                       {"pose_nees_final", finiteOrNull(f.nees_final.pose)},
+                       {"landmark_nees_final", finiteOrNull(f.nees_final.landmark)},
+                       {"pose_nees_relative_final", finiteOrNull(f.nees_final.pose_relative)},
+                       {"landmark_nees_relative_final", finiteOrNull(f.nees_final.landmark_relative)},
+                       {"error_final", finiteOrNull(f.error_final)},
+                       {"error_aligned_final", finiteOrNull(f.error_aligned_final)},
+                       {"mse_final", finiteOrNull(f.mse_final)},
+                       {"mse_aligned_final", finiteOrNull(f.mse_aligned_final)},
                        {"seconds", f.seconds},
                        {"nees", series}});
   }
@@ -299,6 +286,20 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
       {"sample_steps", result.sample_steps},
       {"filters", filters}};
   return j.dump(2);
+}
+
+std::string consistencyCsv(const ConsistencyResult& r) {
+  std::ostringstream csv;
+  csv.precision(10);
+  csv << "filter,step,pose,landmark,pose_relative,landmark_relative\n";
+  for (const ConsistencyFilterResult& f : r.filters) {
+    for (std::size_t s = 0; s < r.sample_steps.size(); ++s) {
+      const NeesPoint& p = f.nees[s];
+      csv << '"' << f.name << "\"," << r.sample_steps[s] << ',' << p.pose << ',' << p.landmark << ','
+          << p.pose_relative << ',' << p.landmark_relative << '\n';
+    }
+  }
+  return csv.str();
 }
 
 std::string consistencyTable(const ConsistencyResult& result) {
@@ -338,6 +339,13 @@ std::string consistencyTable(const ConsistencyResult& result) {
     << "] (3 dof), landmark [" << cell(result.landmark_band.lo, 2) << ", " << cell(result.landmark_band.hi, 2)
     << "] (2 dof, each landmark's NEES averaged over the map first).\n";
   return t.str();
+}
+
+void writeConsistencyResults(const ConsistencyResult& result, const ConsistencyOptions& options,
+                             const std::filesystem::path& dir) {
+  writeFileAtomically(dir / "nees.json", consistencyJson(result, options) + "\n");
+  writeFileAtomically(dir / "nees.csv", consistencyCsv(result));
+  writeFileAtomically(dir / "table.md", consistencyTable(result));
 }
 
 }  // namespace seif

@@ -1,9 +1,10 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
+#include <seif/eval/run_loop.hpp>
 #include <seif/models/odometry_model.hpp>
 
-#include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,56 +17,95 @@ Pose2 startPose(const Dataset& data) {
 
 namespace {
 
-/// One filter cycle of a run, timed and checked (the one place a run calls the filter).
-void runStep(SlamFilter& filter, const Step& step, std::size_t k, RunOutput& out) {
-  using Clock = std::chrono::steady_clock;
-  const auto t0 = Clock::now();
-  try {
-    filter.step(step.u, step.observations);
-  } catch (const std::exception& e) {
-    std::ostringstream msg;
-    msg << filter.name() << ": step " << k << " (t = " << std::fixed << step.time << "): " << e.what();
-    throw NumericError(msg.str());
-  }
-  const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
-  out.step_seconds.push_back(dt);
-  out.seconds += dt;
-  const Pose2 x = filter.pose();
-  if (!x.allFinite()) {
-    std::ostringstream msg;
-    msg << filter.name() << ": the pose estimate is not finite after step " << k;
-    throw NumericError(msg.str());
-  }
-  out.trajectory.push_back({step.time, x});
-  out.max_robot_links = std::max(out.max_robot_links, filter.robotLinks());
-  out.max_blocks_touched = std::max(out.max_blocks_touched, filter.blocksTouched());
-  ++out.steps;
-}
-
-void finish(SlamFilter& filter, RunOutput& out) {
-  const auto t0 = std::chrono::steady_clock::now();
-  filter.finish();  // a smoother's solve: part of its time
-  out.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  // A smoother's trajectory is the smoothed one, known only now.
-  const std::vector<Pose2> smoothed = filter.smoothedTrajectory();
-  if (!smoothed.empty()) {
-    if (smoothed.size() != out.trajectory.size()) {
-      throw NumericError(filter.name() + ": the smoothed trajectory has " + std::to_string(smoothed.size()) +
-                         " poses for " + std::to_string(out.trajectory.size()) + " steps");
+/// Records a run into RunOutput: the trajectory (the start pose, then the pose after each
+/// step, checked finite), step times, the largest link counts, and at the end a smoother's
+/// smoothed trajectory and the filter's final statistics.
+class OutputRecorder : public RunObserver {
+ public:
+  explicit OutputRecorder(RunOutput& out) : out_(out) {}
+  void onStart(const SlamFilter& filter, double time) override { out_.trajectory.push_back({time, filter.pose()}); }
+  void afterUpdate(const SlamFilter& filter, const Step& step, std::size_t k, double seconds) override {
+    out_.step_seconds.push_back(seconds);
+    out_.seconds += seconds;
+    const Pose2 x = filter.pose();
+    if (!x.allFinite()) {
+      std::ostringstream msg;
+      msg << filter.name() << ": the pose estimate is not finite after step " << k;
+      throw NumericError(msg.str());
     }
-    for (std::size_t k = 0; k < smoothed.size(); ++k) out.trajectory[k].pose = smoothed[k];
-    if (!out.pose_covariances.empty()) out.pose_covariances = filter.smoothedTrajectoryCovariances();
+    out_.trajectory.push_back({step.time, x});
+    out_.max_robot_links = std::max(out_.max_robot_links, filter.robotLinks());
+    out_.max_blocks_touched = std::max(out_.max_blocks_touched, filter.blocksTouched());
+    ++out_.steps;
   }
-  out.final_stats = filter.stats();
-  out.rejected_observations = filter.rejectedObservations();
-  out.max_robot_links = std::max(out.max_robot_links, out.final_stats.robot_links);
-}
+  void onFinish(const SlamFilter& filter, double seconds) override {
+    out_.seconds += seconds;  // a smoother's solve: part of its time
+    // A smoother's trajectory is the smoothed one, known only now.
+    const std::vector<Pose2> smoothed = filter.smoothedTrajectory();
+    if (!smoothed.empty()) {
+      if (smoothed.size() != out_.trajectory.size()) {
+        throw NumericError(filter.name() + ": the smoothed trajectory has " + std::to_string(smoothed.size()) +
+                           " poses for " + std::to_string(out_.trajectory.size()) + " steps");
+      }
+      for (std::size_t k = 0; k < smoothed.size(); ++k) out_.trajectory[k].pose = smoothed[k];
+      if (!out_.pose_covariances.empty()) out_.pose_covariances = filter.smoothedTrajectoryCovariances();
+    }
+    out_.final_stats = filter.stats();
+    out_.rejected_observations = filter.rejectedObservations();
+    out_.max_robot_links = std::max(out_.max_robot_links, out_.final_stats.robot_links);
+  }
+  void onGroundTruth(const TimedPose& pose) override { out_.groundtruth.push_back(pose); }
+  void onGps(const GpsFix& fix) override { out_.gps.push_back(fix); }
 
-[[noreturn]] void backwards(const EventSource& source, double t, double now) {
-  std::ostringstream msg;
-  msg << "events go back in time (" << t << " after " << now << ")";
-  throw DataError(source.info().source, 0, msg.str());
-}
+ private:
+  RunOutput& out_;
+};
+
+/// The filter's pose covariance at the start and after every step.
+class PoseCovarianceRecorder : public RunObserver {
+ public:
+  explicit PoseCovarianceRecorder(std::vector<Mat3>& covariances) : covariances_(covariances) {}
+  void onStart(const SlamFilter& filter, double) override { covariances_.push_back(filter.poseCovariance()); }
+  void afterUpdate(const SlamFilter& filter, const Step&, std::size_t, double) override {
+    covariances_.push_back(filter.poseCovariance());
+  }
+
+ private:
+  std::vector<Mat3>& covariances_;
+};
+
+/// The controls integrated alone from the filter's start pose, at the steps' stamps.
+class DeadReckoningRecorder : public RunObserver {
+ public:
+  DeadReckoningRecorder(const MotionModel& motion, std::vector<TimedPose>& track) : motion_(motion), track_(track) {}
+  void onStart(const SlamFilter& filter, double time) override {
+    pose_ = filter.pose();
+    track_.push_back({time, pose_});
+  }
+  void afterUpdate(const SlamFilter&, const Step& step, std::size_t, double) override {
+    pose_ = motion_.apply(pose_, step.u);
+    track_.push_back({step.time, pose_});
+  }
+
+ private:
+  const MotionModel& motion_;
+  std::vector<TimedPose>& track_;
+  Pose2 pose_ = Pose2::Zero();
+};
+
+/// Calls `report` after every `every`-th step and after the step numbered `last`.
+class ProgressReporter : public RunObserver {
+ public:
+  ProgressReporter(std::size_t every, std::size_t last, std::function<void(std::size_t)> report)
+      : every_(every), last_(last), report_(std::move(report)) {}
+  void afterUpdate(const SlamFilter&, const Step&, std::size_t k, double) override {
+    if (k % every_ == 0 || k == last_) report_(k);
+  }
+
+ private:
+  std::size_t every_, last_;
+  std::function<void(std::size_t)> report_;
+};
 
 }  // namespace
 
@@ -75,135 +115,29 @@ RunOutput runFilter(SlamFilter& filter, const Dataset& data,
   const std::size_t total = data.steps.size();
   out.trajectory.reserve(total + 1);
   out.step_seconds.reserve(total);
-  out.trajectory.push_back({data.start_time, filter.pose()});
-  const std::size_t every = std::max<std::size_t>(1, total / 100);
-  for (std::size_t k = 0; k < total; ++k) {
-    runStep(filter, data.steps[k], k, out);
-    if (progress && (k % every == 0 || k + 1 == total)) progress(k + 1, total);
-  }
-  finish(filter, out);
+  OutputRecorder recorder(out);
+  ProgressReporter reporter(std::max<std::size_t>(1, total / 100), total - 1,
+                            [&](std::size_t k) { progress(k + 1, total); });
+  std::vector<RunObserver*> observers = {&recorder};
+  if (progress) observers.push_back(&reporter);
+  runLoop(filter, data, observers);
   return out;
-}
-
-void StepAssembler::setRateStep(Step& step, double t) const {
-  step.time = t;
-  step.u = control_;
-  std::visit([&](auto& u) {
-    if constexpr (!std::is_same_v<std::decay_t<decltype(u)>, OdometryIncrement>) u.dt = t - now_;
-  }, step.u);
-}
-
-bool StepAssembler::next(EventSource& source, Step& step, std::vector<TimedPose>* groundtruth,
-                         std::vector<GpsFix>* gps) {
-  Event e;
-  while (source.next(e)) {
-    const double t = eventTime(e);
-    if (started_ && t < now_) backwards(source, t, now_);
-    if (auto* gt = std::get_if<TimedPose>(&e)) {
-      if (groundtruth) groundtruth->push_back(*gt);
-    } else if (auto* fix = std::get_if<GpsFix>(&e)) {
-      if (gps) gps->push_back(*fix);
-    } else if (auto* c = std::get_if<ControlEvent>(&e)) {
-      if (std::holds_alternative<OdometryIncrement>(c->input)) {
-        // An increment ends at its stamp; its observations may still follow.
-        std::optional<Step> done = std::move(pending_);
-        pending_ = Step{t, c->input, {}};
-        started_ = true;
-        now_ = t;
-        if (done) {
-          step = std::move(*done);
-          return true;
-        }
-        continue;
-      }
-      if (started_ && t > now_ && has_control_) {  // the previous control ends here
-        setRateStep(step, t);
-        step.observations.clear();
-        control_ = c->input;
-        now_ = t;
-        return true;
-      }
-      if (!started_) start_time_ = t;
-      started_ = true;
-      control_ = c->input;
-      has_control_ = true;
-      if (early_) {  // observations at the first control's stamp: a step of dt = 0
-        const bool same = early_->time == t;
-        if (!same) dropped_before_first_control_ += early_->observations.size();
-        std::optional<ObservationEvent> first = std::move(early_);
-        early_.reset();
-        now_ = t;
-        if (same) {
-          setRateStep(step, t);
-          step.observations = std::move(first->observations);
-          return true;
-        }
-        continue;
-      }
-      now_ = t;
-    } else {
-      auto& obs = std::get<ObservationEvent>(e);
-      if (pending_) {
-        if (pending_->time == t) {
-          for (Observation& z : obs.observations) pending_->observations.push_back(std::move(z));
-          continue;
-        }
-        step = std::move(*pending_);
-        pending_.reset();
-        // These observations are from the pose reached: a zero-motion step follows.
-        pending_ = Step{t, OdometryIncrement{Vec3::Zero(), Mat3::Zero()}, std::move(obs.observations)};
-        now_ = t;
-        return true;
-      }
-      if (!has_control_) {
-        if (dynamic_cast<const OdometryModel*>(source.info().motion.get()) == nullptr) {
-          // Before the first control; kept if that control starts at this very stamp.
-          if (early_) dropped_before_first_control_ += early_->observations.size();
-          early_ = std::move(obs);
-          continue;
-        }
-        started_ = true;  // observations from the start pose of an odometry chain
-        step = Step{t, OdometryIncrement{Vec3::Zero(), Mat3::Zero()}, std::move(obs.observations)};
-        now_ = t;
-        return true;
-      }
-      setRateStep(step, t);
-      step.observations = std::move(obs.observations);
-      now_ = t;
-      return true;
-    }
-  }
-  if (pending_) {
-    step = std::move(*pending_);
-    pending_.reset();
-    return true;
-  }
-  return false;
 }
 
 RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function<void(double)>& progress,
                     bool pose_covariances) {
   RunOutput out;
   StepAssembler steps;
-  Step step;
-  const MotionModel& motion = *source.info().motion;
-  Pose2 dead_reckoning = filter.pose();
-  std::size_t k = 0;
-  while (steps.next(source, step, &out.groundtruth, &out.gps)) {
-    if (k == 0) {
-      out.trajectory.push_back({steps.startTime(), filter.pose()});
-      out.dead_reckoning.push_back(out.trajectory.back());
-      if (pose_covariances) out.pose_covariances.push_back(filter.poseCovariance());
-    }
-    runStep(filter, step, k, out);
-    if (pose_covariances) out.pose_covariances.push_back(filter.poseCovariance());
-    dead_reckoning = motion.apply(dead_reckoning, step.u);
-    out.dead_reckoning.push_back({step.time, dead_reckoning});
-    if (progress && k % 1024 == 0) progress(source.progress());
-    ++k;
-  }
+  OutputRecorder recorder(out);
+  PoseCovarianceRecorder covariances(out.pose_covariances);
+  DeadReckoningRecorder dead_reckoning(*source.info().motion, out.dead_reckoning);
+  ProgressReporter reporter(1024, SIZE_MAX, [&](std::size_t) { progress(source.progress()); });
+  std::vector<RunObserver*> observers = {&recorder};
+  if (pose_covariances) observers.push_back(&covariances);
+  observers.push_back(&dead_reckoning);
+  if (progress) observers.push_back(&reporter);
+  runLoop(filter, source, steps, observers);
   if (progress) progress(1.0);
-  finish(filter, out);
   out.dropped = source.dropped();
   if (steps.droppedBeforeFirstControl() > 0) out.dropped["before_first_control"] += steps.droppedBeforeFirstControl();
   return out;

@@ -6,6 +6,8 @@
 #include <seif/io/atomic_file.hpp>
 #include <seif/io/results.hpp>
 
+#include "json_fields.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -19,19 +21,6 @@ using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 nlohmann::json optionalJson(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
-
-nlohmann::json seifOptionsObject(const SeifOptions& o) {
-  return {{"active", o.max_active},
-          {"relax", o.relax},
-          {"mean", o.mean == SeifOptions::Mean::Exact ? "exact" : "amortized"},
-          {"deactivate", o.deactivate == SeifOptions::Deactivate::Oldest ? "oldest" : "weakest"},
-          {"recovery", o.recovery == SeifOptions::Recovery::BeforeMeasurement ? "before-update" : "after-update"},
-          {"relax_order", o.relax_order == SeifOptions::RelaxOrder::Cyclic ? "cyclic" : "random"},
-          {"sparsify", o.sparsify == SeifOptions::Sparsify::Eseif ? "eseif" : "seif"},
-          {"beta", o.eseif_beta},
-          {"covariance", o.covariance == SeifOptions::Covariance::Local ? "local" : "exact"},
-          {"seed", o.seed}};
-}
 
 std::string metricsJson(const RunRequest& request, const RunReport& r) {
   const RunOutput& out = r.output;
@@ -86,13 +75,13 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"dropped", dropped},
   };
   if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
-  if (request.filter == "seif") j["seif"] = seifOptionsObject(request.seif);
+  if (request.filter == "seif") j["seif"] = toJson(request.seif);
   return j.dump(2) + "\n";
 }
 
 }  // namespace
 
-std::string seifOptionsJson(const SeifOptions& o) { return seifOptionsObject(o).dump(); }
+std::string seifOptionsJson(const SeifOptions& o) { return toJson(o).dump(); }
 
 std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const std::vector<GpsFix>& gps,
                               std::size_t* compared, std::optional<double>* median) {
@@ -151,6 +140,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   writeTum(out / "trajectory.tum", report.output.trajectory);
   writeTum(out / "dead_reckoning.tum", report.output.dead_reckoning);
   writeMapCsv(out / "map.csv", *filter, request.map_covariances);  // marginals computed here
+  if (!report.output.gps.empty()) writeGpsCsv(out / "gps.csv", report.output.gps);  // for `seif plot`
   if (request.trajectory_covariances) {
     writeTrajectoryCovariance(out / "trajectory_cov.csv", report.output.trajectory, report.output.pose_covariances);
   }

@@ -20,6 +20,13 @@ void writeTum(const std::filesystem::path& file, const std::vector<TimedPose>& t
   f.commit();
 }
 
+void writeGpsCsv(const std::filesystem::path& file, const std::vector<GpsFix>& fixes) {
+  AtomicFile f(file);
+  std::fprintf(f.get(), "time,x,y\n");
+  for (const GpsFix& g : fixes) std::fprintf(f.get(), "%.6f,%.9g,%.9g\n", g.time, g.position.x(), g.position.y());
+  f.commit();
+}
+
 void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory,
                                const std::vector<Mat3>& covariances) {
   if (trajectory.size() != covariances.size()) {

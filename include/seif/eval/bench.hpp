@@ -4,12 +4,15 @@
 // per step, so a run of the whole corridor maps all N), and the cost model that decides
 // which (filter, N) would not fit in memory or time.
 //
-// runBenchCase() measures one case in the calling process; `seif bench` runs each case in a
-// forked child so that the peak memory of one case does not leak into the next.
+// runBenchCase() measures one case in the calling process; runBench() runs the whole study,
+// each case in a forked child so that the peak memory of one case does not leak into the next.
 #include <seif/filters/seif_slam.hpp>
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <optional>
+#include <utility>
 #include <span>
 #include <string>
 #include <string_view>
@@ -118,5 +121,70 @@ struct BenchEstimate {
 };
 BenchEstimate estimateBenchCase(std::string_view filter, int landmarks, double steps,
                                 std::span<const BenchPoint> measured);
+
+// ---------------------------------------------------------------- the whole study ----------
+
+/// `seif bench` as one call: every (filter, N), each measured in forked children so that
+/// one case's peak memory cannot inflate the next; a case whose estimate (extrapolated
+/// from the smaller cases) exceeds the budget is skipped with the reason.
+struct BenchRequest {
+  std::vector<std::string> filters = {"ekf", "eif", "seif"};  ///< duplicates are dropped
+  std::vector<int> landmarks = {100, 1000, 10000, 100000, 1000000};  ///< sorted, deduplicated
+  int window = 200;
+  /// Runs per case, each in its own child; the one with the lowest median is reported
+  /// (interference only ever slows a run down). A case whose corridor is shorter than
+  /// 2 window runs proportionally more often, so that every case times about repeat x
+  /// window steps.
+  int repeat = 3;
+  std::uint64_t world_seed = 1;
+  double max_seconds = 120.0;   ///< time budget of all runs of one case
+  double max_memory_gb = 4.0;   ///< memory budget of one case
+  SeifOptions seif;
+};
+
+/// One (filter, N) of the study.
+struct BenchRow {
+  std::string filter;
+  int landmarks = 0;
+  std::optional<BenchMeasurement> measurement;  ///< the best run; its peak memory the largest
+  std::vector<double> repeat_medians;           ///< every run's median [us]
+  std::optional<BenchEstimate> estimate;        ///< when smaller cases allowed one
+  std::string skipped;  ///< why there is no measurement (over budget, or "failed: ...")
+};
+
+/// The targets, from what was measured: the SEIF's median at the largest N within
+/// 1.5x its median at the smallest; the SEIF at least 100x faster than the EKF at 1000
+/// landmarks (else at the largest N both ran); the SEIF's bytes per landmark.
+struct BenchTargets {
+  struct Growth {
+    int from_landmarks = 0, to_landmarks = 0;
+    double from_us = 0.0, to_us = 0.0, ratio = 0.0;
+    bool met = false;
+  };
+  struct Speedup {
+    int landmarks = 0;
+    double ekf_us = 0.0, seif_us = 0.0, ratio = 0.0;
+    bool met = false;
+  };
+  std::optional<Growth> seif_growth;
+  std::optional<Speedup> ekf_over_seif;
+  std::vector<std::pair<int, double>> seif_bytes_per_landmark;  ///< (N, bytes)
+};
+
+struct BenchReport {
+  BenchRequest request;  ///< with the filters and sizes deduplicated
+  std::vector<BenchRow> rows;
+  std::vector<BenchMeasurement> calibration;  ///< cases run only to extrapolate from
+  BenchTargets targets;
+};
+
+/// Runs the study; `row_done(row)` follows every case, measured or skipped. Throws
+/// NumericError when a calibration case fails.
+BenchReport runBench(const BenchRequest& request, const std::function<void(const BenchRow&)>& row_done = {});
+
+BenchTargets benchTargets(const std::vector<BenchMeasurement>& measured);
+
+/// bench.json: {"machine", "config", "results" (one per row), "calibration", "targets"}.
+std::string benchJson(const BenchReport& report);
 
 }  // namespace seif

@@ -15,6 +15,7 @@
 #include <seif/sim/world.hpp>
 
 #include <cstddef>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <string>
@@ -79,6 +80,14 @@ NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const st
 /// [...], "landmark": [...], "pose_relative": [...], "landmark_relative": [...]}}]}.
 /// NaN is written as null.
 std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOptions& options);
+
+/// nees.csv: "filter,step,pose,landmark,pose_relative,landmark_relative", one row per filter
+/// and sample step: the NEES series of the figures.
+std::string consistencyCsv(const ConsistencyResult& result);
+
+/// Writes DIR/nees.json, DIR/nees.csv and DIR/table.md (consistencyTable) into `dir`.
+void writeConsistencyResults(const ConsistencyResult& result, const ConsistencyOptions& options,
+                             const std::filesystem::path& dir);
 
 /// The console / README table: one row per filter with final NEES (global, relative),
 /// errors, and their mean squared error as a multiple of the first smoother's ("batch")

@@ -3,8 +3,9 @@
 // simulator's paper world (50 landmarks, 500 update cycles, known data association) run the
 // EKF, the SEIF with exact mean and the constant-time SEIF on identical data, and measure
 // each one's final map error, final number of links and time per update. One call of
-// runPaperExperiment() is one run of the Monte-Carlo study; `seif paper` runs many in
-// parallel and summarises them (eval/stats.hpp).
+// runPaperExperiment() is one run of the Monte-Carlo study; runPaper() runs many in
+// parallel, summarises them (eval/stats.hpp) and writePaperResults() writes what `seif
+// paper` leaves behind.
 #include <seif/eval/run.hpp>
 #include <seif/eval/stats.hpp>
 #include <seif/filters/factory.hpp>
@@ -16,6 +17,8 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -122,6 +125,54 @@ struct PaperRunDetail {
 /// A filter failure is rethrown as NumericError naming the seed.
 PaperRun runPaperExperiment(std::uint64_t seed, const PaperOptions& options,
                             PaperRunDetail* detail = nullptr);
+
+// ---------------------------------------------------------------- the whole study ---------
+
+/// `seif paper` as one call: `runs` independent runs of the paper world, summarised.
+struct PaperRequest {
+  int runs = 100;
+  std::uint64_t seed = 1;  ///< run r uses simulator seed seed + r
+  unsigned jobs = 0;       ///< threads; 0: the number of cores (results do not depend on it)
+  PaperOptions options;
+};
+
+/// A run that failed and is left out of the statistics.
+struct PaperFailure {
+  std::uint64_t seed = 0;
+  std::string error;
+};
+
+struct PaperReport {
+  PaperRequest request;
+  unsigned jobs = 1;      ///< threads used
+  WorldConfig world;      ///< paperWorld(request.seed, request.options)
+  std::vector<PaperFilterSpec> specs;         ///< paperFilters(request.options)
+  std::vector<PaperRun> runs;                 ///< the successful runs, in seed order
+  std::vector<PaperFailure> failed;           ///< in seed order
+  std::vector<PaperFilterSummary> summaries;  ///< one per spec
+  /// The figures' run, chosen by a rule fixed in advance: the run whose constant-time SEIF
+  /// has the median final error (the lower median for an even count), run again with its
+  /// filters kept (the paper's three filters; no sweep).
+  std::size_t typical = 0;  ///< index into runs
+  PaperRunDetail typical_detail;
+};
+
+/// Throws InvalidArgument when runs < 1 or seed + runs - 1 passes 2^64 - 1.
+void checkPaperRequest(const PaperRequest& request);
+
+/// Runs the study on the experiments' thread pool (eval/parallel.hpp); `progress(done,
+/// total)` counts runs, one call at a time. A failed run is recorded, not thrown; throws
+/// NumericError when every run failed, and what checkPaperRequest() throws.
+PaperReport runPaper(const PaperRequest& request,
+                     const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+/// What `seif paper` prints: the table beside the paper's numbers, its notes, and the
+/// sweep's and the beyond-the-paper tables when they ran.
+std::string paperSummaryText(const PaperReport& report);
+
+/// Writes DIR/results.json, DIR/table.md and DIR/figure_data/<filter>.json (the data of
+/// scripts/figures/paper.py), creating DIR.
+void writePaperResults(const PaperReport& report, const std::filesystem::path& dir);
 
 /// A filter's state laid out for figures, landmarks ordered by id (so that two filters'
 /// matrices are comparable whatever order they mapped the landmarks in).

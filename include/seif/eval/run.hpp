@@ -1,11 +1,13 @@
 #pragma once
-// Runs a filter over a dataset and measures it: the one loop behind `seif run`,
-// `seif paper` and `seif bench`. A dataset comes either in memory (Dataset: the simulator's
-// worlds) or as a stream of events (EventSource: every reader); StepAssembler turns events
-// into filter steps, and the run never holds the observations of more than one step.
+// Runs a filter over a dataset and measures it: runFilter() is the run loop (run_loop.hpp)
+// with the observers that record a RunOutput, behind `seif run` and `seif paper`. A dataset
+// comes either in memory (Dataset: the simulator's worlds) or as a stream of events
+// (EventSource: every reader); StepAssembler (step_assembler.hpp) turns events into filter
+// steps, and the run never holds the observations of more than one step.
 #include <seif/filters/slam_filter.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/io/event_source.hpp>
+#include <seif/eval/step_assembler.hpp>
 
 #include <cstddef>
 #include <functional>
@@ -35,40 +37,6 @@ struct RunOutput {
   std::vector<TimedPose> groundtruth;
   std::vector<GpsFix> gps;
   std::map<std::string, std::size_t> dropped;  ///< by the source and the assembler, by reason
-};
-
-/// Turns a time-ordered event stream into filter steps (the rule of buildDataset(), for any
-/// motion input). A rate control (velocity, Ackermann) is in force from its stamp until the
-/// next control; an observation event predicts with it up to its stamp, then updates, and
-/// a control stamp after the last step closes an interval without observations. An
-/// odometry increment is one step ending at its stamp; observations with the same stamp
-/// join that step, observations before any increment get a zero-motion step. Observations
-/// before the first rate control are dropped and counted ("before_first_control"), those at
-/// its very stamp form a step of dt = 0 (as buildDataset()).
-/// Ground truth and GPS are handed on as they come.
-class StepAssembler {
- public:
-  /// The next step; false at the end of the stream. Events whose time goes backwards are a
-  /// DataError naming the source.
-  bool next(EventSource& source, Step& step, std::vector<TimedPose>* groundtruth,
-            std::vector<GpsFix>* gps);
-  /// Time of the start pose: the first rate control's stamp, or 0 (pose index 0) for
-  /// odometry increments. Valid after the first next().
-  double startTime() const { return start_time_; }
-  std::size_t droppedBeforeFirstControl() const { return dropped_before_first_control_; }
-
- private:
-  /// `step` = the control in force from now_ to t, without observations.
-  void setRateStep(Step& step, double t) const;
-
-  MotionInput control_;  // the rate control in force, when has_control_
-  bool has_control_ = false;
-  std::optional<Step> pending_;         // an odometry step waiting for its observations
-  std::optional<ObservationEvent> early_;  // observations before the first rate control
-  bool started_ = false;
-  double now_ = 0.0;  // time the last emitted step ended
-  double start_time_ = 0.0;
-  std::size_t dropped_before_first_control_ = 0;
 };
 
 /// Streams `source` through `filter`, whose config must hold the source's models (the

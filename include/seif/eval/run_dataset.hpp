@@ -5,6 +5,7 @@
 //   dead_reckoning.tum  the controls integrated alone from the same start, at the same stamps
 //   map.csv         id, x, y and the landmark's 2x2 marginal covariance
 //   metrics.json    timing, structure, errors (keys in docs/outputs.md and below)
+//   gps.csv         time, x, y of the dataset's GPS fixes, when it has any
 // Errors: ATE and map error against ground truth when the dataset has it (after the best
 // rigid 2-D alignment and as estimated); gps_rmse and dead_reckoning_gps_rmse against GPS
 // when the dataset has it (trajectory interpolated at the GPS stamps inside its span, after

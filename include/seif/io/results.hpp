@@ -1,6 +1,6 @@
 #pragma once
-// Result files of a run: trajectory.tum (TUM format, read by evo and most SLAM tools) and
-// map.csv (id, x, y, and the 2x2 marginal covariance). Both are written atomically
+// Result files of a run: trajectory.tum (TUM format, read by evo and most SLAM tools),
+// map.csv (id, x, y, and the 2x2 marginal covariance) and the dataset's GPS fixes (gps.csv). Both are written atomically
 // (AtomicFile): complete, or absent.
 #include <seif/filters/slam_filter.hpp>
 #include <seif/core/dataset.hpp>
@@ -20,6 +20,10 @@ void writeTum(const std::filesystem::path& file, const std::vector<TimedPose>& t
 /// (time,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt; t = heading), one row per trajectory pose.
 void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory,
                                const std::vector<Mat3>& covariances);
+
+/// gps.csv: header "time,x,y", one row per GPS fix as the dataset gave it (metres, the
+/// dataset's local frame).
+void writeGpsCsv(const std::filesystem::path& file, const std::vector<GpsFix>& fixes);
 
 void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter, bool covariances = true);
 

@@ -1,0 +1,20 @@
+#pragma once
+// The thread pool of the experiments (paper, consistency): independent runs, each stored
+// by its index, so that results never depend on the number of threads.
+#include <cstddef>
+#include <functional>
+
+namespace seif {
+
+/// The threads a study of `tasks` tasks uses: `requested`, or the number of cores when 0,
+/// never more than the tasks and at least 1.
+unsigned threadCount(unsigned requested, std::size_t tasks);
+
+/// Runs task(i) for every i in [0, count) on threadCount(threads, count) threads (the
+/// calling one among them), taking the indices in order. `done(finished, count)` follows
+/// every task that returned, one call at a time. The first exception a task throws stops
+/// the others from starting new tasks and is rethrown here once all have stopped.
+void parallelFor(std::size_t count, unsigned threads, const std::function<void(std::size_t)>& task,
+                 const std::function<void(std::size_t, std::size_t)>& done = {});
+
+}  // namespace seif

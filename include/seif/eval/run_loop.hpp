@@ -1,0 +1,70 @@
+#pragma once
+// The run loop: the one place that turns a run's steps into filter calls (predict, then
+// update, step after step, then finish). Everything else about a run - its trajectory,
+// timing, dead reckoning, covariances, progress, an experiment's measurements - watches
+// the loop through RunObserver hooks. Steps come from an in-memory Dataset or are
+// assembled from an EventSource (StepAssembler) without holding the log in memory.
+//
+// Two seams for what comes later: RunLoopOptions::associate may rewrite a step's
+// observations between predict and update (data association), and
+// RunLoopOptions::start_step skips the first steps of the source without calling the
+// filter (a run resumed from a checkpoint saved after step start_step - 1).
+#include <seif/core/dataset.hpp>
+#include <seif/eval/step_assembler.hpp>
+#include <seif/filters/slam_filter.hpp>
+#include <seif/io/event_source.hpp>
+
+#include <cstddef>
+#include <functional>
+#include <vector>
+
+namespace seif {
+
+/// Hooks into a run; each does nothing unless overridden. Called in the order the
+/// observers were given. `k` counts the source's steps from 0 (skipped ones included).
+class RunObserver {
+ public:
+  virtual ~RunObserver() = default;
+  /// Before the first step run: the filter at its start, and the time of its pose (the
+  /// dataset's start time, or the time of the last skipped step).
+  virtual void onStart(const SlamFilter& /*filter*/, double /*time*/) {}
+  /// After the predict of step k; `seconds` is the predict's wall time.
+  virtual void afterPredict(const SlamFilter& /*filter*/, const Step& /*step*/, std::size_t /*k*/,
+                            double /*seconds*/) {}
+  /// After the update of step k; `seconds` is the wall time of the step's filter calls
+  /// (predict + update, without the observers and the association hook).
+  virtual void afterUpdate(const SlamFilter& /*filter*/, const Step& /*step*/, std::size_t /*k*/,
+                           double /*seconds*/) {}
+  /// After the last step and the filter's finish(); `seconds` is finish()'s wall time.
+  virtual void onFinish(const SlamFilter& /*filter*/, double /*seconds*/) {}
+  /// Streamed runs: the ground truth and GPS fixes the stream carries, as they come
+  /// (before the step they precede; skipped steps' too).
+  virtual void onGroundTruth(const TimedPose& /*pose*/) {}
+  virtual void onGps(const GpsFix& /*fix*/) {}
+};
+
+/// Between predict and update of step k: may rewrite `observations` (initially the step's)
+/// before the filter's update sees them, e.g. to associate them with the map.
+using AssociateHook = std::function<void(const SlamFilter& filter, const Step& step, std::size_t k,
+                                         std::vector<Observation>& observations)>;
+
+struct RunLoopOptions {
+  /// Steps 0 .. start_step - 1 are taken from the source but not run and not observed.
+  std::size_t start_step = 0;
+  /// Data association between predict and update; none: the step's observations as they are.
+  AssociateHook associate;
+};
+
+/// Runs the steps of `data` from options.start_step through `filter`, then finish().
+/// A failure inside a step (the filter's or the association hook's) is rethrown as
+/// NumericError "<filter name>: step k (t = <time>): <what>". Returns the steps run.
+std::size_t runLoop(SlamFilter& filter, const Dataset& data, const std::vector<RunObserver*>& observers,
+                    const RunLoopOptions& options = {});
+
+/// The same over the steps `steps` assembles from `source` (a fresh assembler for a whole
+/// run). onStart comes with the first step run, so a stream without steps calls none of
+/// the step hooks; onFinish and finish() always come.
+std::size_t runLoop(SlamFilter& filter, EventSource& source, StepAssembler& steps,
+                    const std::vector<RunObserver*>& observers, const RunLoopOptions& options = {});
+
+}  // namespace seif

@@ -1,0 +1,101 @@
+// The run loop (include/seif/eval/run_loop.hpp): the only code that calls a filter's
+// predict and update for a run.
+#include <seif/core/errors.hpp>
+#include <seif/eval/run_loop.hpp>
+
+#include <chrono>
+#include <sstream>
+
+namespace seif {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+/// One filter cycle: predict, the association hook, update; timed and observed.
+void runStep(SlamFilter& filter, const Step& step, std::size_t k, const std::vector<RunObserver*>& observers,
+             const RunLoopOptions& options) {
+  double seconds = 0.0;
+  try {
+    const auto t0 = Clock::now();
+    filter.predict(step.u);
+    const auto t1 = Clock::now();
+    seconds = secondsBetween(t0, t1);
+    for (RunObserver* o : observers) o->afterPredict(filter, step, k, seconds);
+    if (options.associate) {
+      std::vector<Observation> observations = step.observations;
+      options.associate(filter, step, k, observations);
+      const auto t2 = Clock::now();
+      filter.update(observations);
+      seconds += secondsBetween(t2, Clock::now());
+    } else {
+      const auto t2 = Clock::now();
+      filter.update(step.observations);
+      seconds += secondsBetween(t2, Clock::now());
+    }
+  } catch (const std::exception& e) {
+    std::ostringstream msg;
+    msg << filter.name() << ": step " << k << " (t = " << std::fixed << step.time << "): " << e.what();
+    throw NumericError(msg.str());
+  }
+  for (RunObserver* o : observers) o->afterUpdate(filter, step, k, seconds);
+}
+
+void finishRun(SlamFilter& filter, const std::vector<RunObserver*>& observers) {
+  const auto t0 = Clock::now();
+  filter.finish();  // a smoother's solve
+  const double seconds = secondsBetween(t0, Clock::now());
+  for (RunObserver* o : observers) o->onFinish(filter, seconds);
+}
+
+}  // namespace
+
+std::size_t runLoop(SlamFilter& filter, const Dataset& data, const std::vector<RunObserver*>& observers,
+                    const RunLoopOptions& options) {
+  const std::size_t first = std::min(options.start_step, data.steps.size());
+  const double start_time = first == 0 ? data.start_time : data.steps[first - 1].time;
+  for (RunObserver* o : observers) o->onStart(filter, start_time);
+  for (std::size_t k = first; k < data.steps.size(); ++k) runStep(filter, data.steps[k], k, observers, options);
+  finishRun(filter, observers);
+  return data.steps.size() - first;
+}
+
+std::size_t runLoop(SlamFilter& filter, EventSource& source, StepAssembler& steps,
+                    const std::vector<RunObserver*>& observers, const RunLoopOptions& options) {
+  std::vector<TimedPose> groundtruth;
+  std::vector<GpsFix> gps;
+  // Hands what the stream carried besides steps to the observers, as it came.
+  auto handOn = [&] {
+    for (const TimedPose& p : groundtruth)
+      for (RunObserver* o : observers) o->onGroundTruth(p);
+    for (const GpsFix& g : gps)
+      for (RunObserver* o : observers) o->onGps(g);
+    groundtruth.clear();
+    gps.clear();
+  };
+  Step step;
+  std::size_t k = 0, run = 0;
+  double last_time = 0.0;  // time of the last skipped step
+  while (steps.next(source, step, &groundtruth, &gps)) {
+    handOn();
+    if (k < options.start_step) {
+      last_time = step.time;
+      ++k;
+      continue;
+    }
+    if (run == 0) {
+      const double start_time = k == 0 ? steps.startTime() : last_time;
+      for (RunObserver* o : observers) o->onStart(filter, start_time);
+    }
+    runStep(filter, step, k, observers, options);
+    ++k;
+    ++run;
+  }
+  handOn();
+  finishRun(filter, observers);
+  return run;
+}
+
+}  // namespace seif
