@@ -42,6 +42,8 @@ class FailingFilter : public SlamFilter {
   Marginal marginal(std::span<const int> ids, bool pose, MarginalMode mode) const override {
     return ekf_.marginal(ids, pose, mode);
   }
+  void removeLandmark(int id) override { ekf_.removeLandmark(id); }
+  void mergeLandmarks(int keep, int drop) override { ekf_.mergeLandmarks(keep, drop); }
   Pose2 pose() const override { return ekf_.pose(); }
   Mat3 poseCovariance() const override { return ekf_.poseCovariance(); }
   const std::vector<int>& landmarkIds() const override { return ekf_.landmarkIds(); }

@@ -417,6 +417,14 @@ Mat2 BatchMap::landmarkCovariance(int id) const {
   return kktMarginal({l, l + 1});
 }
 
+void BatchMap::removeLandmark(int) {
+  throw InvalidArgument("batch: landmarks cannot be removed from the batch MAP (it keeps every measurement)");
+}
+
+void BatchMap::mergeLandmarks(int, int) {
+  throw InvalidArgument("batch: landmarks cannot be merged in the batch MAP (it keeps every measurement)");
+}
+
 Marginal BatchMap::marginal(std::span<const int> landmarks, bool pose, MarginalMode mode) const {
   if (!solution_) return inner_.marginal(landmarks, pose, mode);
   std::vector<Eigen::Index> rows;

@@ -84,6 +84,50 @@ Marginal EifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalMo
   return m;
 }
 
+void EifSlam::deleteSlot(int slot) {
+  const Eigen::Index i = StateLayout::landmark(slot), n = H_.rows(), last = n - 2;
+  if (i != last) {
+    b_.segment<2>(i) = b_.tail<2>();
+    mu_.segment<2>(i) = mu_.tail<2>();
+    H_.middleRows<2>(i) = H_.bottomRows<2>();
+    H_.middleCols<2>(i) = H_.rightCols<2>();
+    H_.block<2, 2>(i, i) = H_.bottomRightCorner<2, 2>();
+  }
+  H_.conservativeResize(last, last);
+  b_.conservativeResize(last);
+  mu_.conservativeResize(last);
+  book_.removeSlot(slot);
+  llt_valid_ = false;
+}
+
+void EifSlam::removeLandmark(int id) {
+  const int slot = book_.require(id);
+  const Eigen::Index l = StateLayout::landmark(slot);
+  // The Schur complement over y_l: H -= H_{:,l} H_ll^-1 H_{l,:}, b -= H_{:,l} H_ll^-1 b_l.
+  const Eigen::LLT<Mat2> llt(H_.block<2, 2>(l, l));
+  if (llt.info() != Eigen::Success) {
+    throw NumericError("eif: information of landmark " + std::to_string(id) + " is not positive definite");
+  }
+  const Eigen::MatrixXd H_col = H_.middleCols<2>(l);
+  const Eigen::MatrixXd W = llt.solve(H_col.transpose());  // H_ll^-1 H_{l,:}
+  b_ -= H_col * llt.solve(b_.segment<2>(l));
+  H_ -= H_col * W;
+  H_ = (0.5 * (H_ + H_.transpose())).eval();
+  deleteSlot(slot);  // its rows are zero now; the others' marginal mean is unchanged
+}
+
+void EifSlam::mergeLandmarks(int keep, int drop) {
+  const int k = book_.require(keep), d = book_.require(drop);
+  if (k == d) throw InvalidArgument("eif: cannot merge landmark " + std::to_string(keep) + " with itself");
+  const Eigen::Index ik = StateLayout::landmark(k), id = StateLayout::landmark(d);
+  // H' = T^T H T, b' = T^T b: drop's rows, then columns, added into keep's.
+  H_.middleRows<2>(ik) += H_.middleRows<2>(id);
+  H_.middleCols<2>(ik) += H_.middleCols<2>(id);
+  b_.segment<2>(ik) += b_.segment<2>(id);
+  deleteSlot(d);
+  recoverMean();
+}
+
 void EifSlam::predict(const MotionIncrement& increment) {
   const MotionIncrement m = book_.motionIncrement(increment, mu_.head<2>());
   Eigen::MatrixXd workspace(6, H_.cols());

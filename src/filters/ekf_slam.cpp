@@ -41,6 +41,41 @@ Marginal EkfSlam::marginal(std::span<const int> landmarks, bool pose, MarginalMo
   return {mu_(rows), sigma_(rows, rows)};
 }
 
+void EkfSlam::deleteSlot(int slot) {
+  const Eigen::Index i = StateLayout::landmark(slot), n = sigma_.rows(), last = n - 2;
+  if (i != last) {  // the last landmark's rows and columns move into slot's
+    mu_.segment<2>(i) = mu_.tail<2>();
+    sigma_.middleRows<2>(i) = sigma_.bottomRows<2>();
+    sigma_.middleCols<2>(i) = sigma_.rightCols<2>();
+    sigma_.block<2, 2>(i, i) = sigma_.bottomRightCorner<2, 2>();
+  }
+  mu_.conservativeResize(last);
+  sigma_.conservativeResize(last, last);
+  book_.removeSlot(slot);
+}
+
+void EkfSlam::removeLandmark(int id) { deleteSlot(book_.require(id)); }
+
+void EkfSlam::mergeLandmarks(int keep, int drop) {
+  const int k = book_.require(keep), d = book_.require(drop);
+  if (k == d) throw InvalidArgument("ekf: cannot merge landmark " + std::to_string(keep) + " with itself");
+  // Condition on A y = y_keep - y_drop = 0, a noiseless measurement: S = A Sigma A^T,
+  // K = Sigma A^T S^-1, mu -= K A mu, Sigma -= K A Sigma.
+  const Eigen::Index ik = StateLayout::landmark(k), id = StateLayout::landmark(d);
+  const Eigen::MatrixXd SAt = sigma_.middleCols<2>(ik) - sigma_.middleCols<2>(id);  // Sigma A^T
+  const Mat2 S = SAt.middleRows<2>(ik) - SAt.middleRows<2>(id);
+  const Eigen::LLT<Mat2> llt(0.5 * (S + S.transpose()));
+  if (llt.info() != Eigen::Success) {
+    throw NumericError("ekf: landmarks " + std::to_string(keep) + " and " + std::to_string(drop) +
+                       " cannot be merged: their difference has no uncertainty left");
+  }
+  const Eigen::MatrixXd K = llt.solve(SAt.transpose()).transpose();
+  mu_ -= K * (mu_.segment<2>(ik) - mu_.segment<2>(id));
+  sigma_ -= K * SAt.transpose();
+  sigma_ = (0.5 * (sigma_ + sigma_.transpose())).eval();
+  deleteSlot(d);
+}
+
 void EkfSlam::predict(const MotionIncrement& increment) {
   const MotionIncrement m = book_.motionIncrement(increment, mu_.head<2>());
   const Mat3& U = m.U;

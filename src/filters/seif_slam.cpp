@@ -355,6 +355,31 @@ bool SeifSlam::relocalizeRobot(const MeasurementModel& sensor) {
   return true;
 }
 
+// ---------------------------------------------------------------- removal and merge ---
+
+void SeifSlam::removeLandmark(int id) {
+  const int slot = book_.require(id);
+  store_.marginalizeLandmark(slot);
+  book_.removeSlot(slot);
+  invalidateFactor();
+  deactivateSurplus(false);
+}
+
+void SeifSlam::mergeLandmarks(int keep, int drop) {
+  const int k = book_.require(keep), d = book_.require(drop);
+  if (k == d) throw InvalidArgument("seif: cannot merge landmark " + std::to_string(keep) + " with itself");
+  store_.mergeLandmarks(k, d);
+  book_.removeSlot(d);
+  invalidateFactor();
+  const int kept = book_.find(keep);  // keep may have moved into d's slot
+  if (options_.mean == SeifOptions::Mean::Exact) {
+    recoverExactMean();
+  } else {
+    store_.relaxLandmark(kept);
+  }
+  deactivateSurplus(false);
+}
+
 // ---------------------------------------------------------------- reading out ---------
 
 Eigen::VectorXd SeifSlam::mean() const { return store_.mean(); }

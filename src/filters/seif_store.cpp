@@ -77,6 +77,101 @@ void SeifStore::removeRobotLink(int slot) {
   robot_links_.pop_back();
 }
 
+void SeifStore::marginalizeLandmark(int slot) {
+  const Node& l = nodes_[static_cast<std::size_t>(slot)];
+  Eigen::LLT<Mat2> llt(l.H);
+  if (llt.info() != Eigen::Success) {
+    throw NumericError("seif: information of landmark " + std::to_string(ids_[static_cast<std::size_t>(slot)]) +
+                       " is not positive definite; it cannot be marginalised out");
+  }
+  // The blanket's blocks H_{a,l} (a = -1 the robot), then the Schur complement pair by pair.
+  std::vector<std::pair<int, Eigen::Matrix<double, Eigen::Dynamic, 2, 0, 3, 2>>> blanket;
+  if (l.active >= 0) blanket.emplace_back(-1, robot_links_[static_cast<std::size_t>(l.active)].H);
+  for (const Link& k : l.links) blanket.emplace_back(k.slot, k.H.transpose());  // H_{a,l} = H_{l,a}^T
+  const Vec2 W_b = llt.solve(l.b);  // H_ll^-1 b_l
+  for (std::size_t i = 0; i < blanket.size(); ++i) {
+    const auto& [a, H_al] = blanket[i];
+    const Eigen::Matrix<double, 2, Eigen::Dynamic, 0, 2, 3> W_a = llt.solve(H_al.transpose());  // H_ll^-1 H_la
+    for (std::size_t j = i; j < blanket.size(); ++j) {
+      const auto& [c, H_cl] = blanket[j];
+      Eigen::MatrixXd D = (H_cl * W_a).transpose();  // H_al H_ll^-1 H_lc
+      if (a == c) D = (0.5 * (D + D.transpose())).eval();  // diagonal blocks stay symmetric
+      if (a < 0 && c < 0) {
+        H_xx_ -= D;
+      } else if (a < 0) {  // the robot and landmark c
+        Node& nc = nodes_[static_cast<std::size_t>(c)];
+        if (nc.active < 0) {
+          nc.active = static_cast<int>(robot_links_.size());
+          robot_links_.push_back({c, Mat32::Zero(), step_});
+        }
+        robot_links_[static_cast<std::size_t>(nc.active)].H -= D;
+      } else if (a == c) {
+        nodes_[static_cast<std::size_t>(a)].H -= D;
+      } else {
+        addToLink(a, c, -D);
+      }
+    }
+    if (a < 0) {
+      b_x_ -= H_al * W_b;
+    } else {
+      nodes_[static_cast<std::size_t>(a)].b -= H_al * W_b;
+    }
+  }
+  deleteLandmark(slot);
+}
+
+void SeifStore::mergeLandmarks(int keep, int drop) {
+  Node& k = nodes_[static_cast<std::size_t>(keep)];
+  const Node d = nodes_[static_cast<std::size_t>(drop)];  // a copy: links change below
+  // H'_kk = H_kk + H_kd + H_dk + H_dd, b'_k = b_k + b_d.
+  k.H += d.H;
+  if (const Mat2* H_kd = findLink(keep, drop)) {
+    const Mat2 kd = *H_kd;
+    nodes_[static_cast<std::size_t>(keep)].H += kd + kd.transpose();
+  }
+  nodes_[static_cast<std::size_t>(keep)].b += d.b;
+  for (const Link& l : d.links) {
+    if (l.slot != keep) addToLink(keep, l.slot, l.H);
+  }
+  if (d.active >= 0) {
+    const RobotLink& r = robot_links_[static_cast<std::size_t>(d.active)];
+    Node& nk = nodes_[static_cast<std::size_t>(keep)];
+    if (nk.active < 0) {
+      nk.active = static_cast<int>(robot_links_.size());
+      robot_links_.push_back({keep, Mat32::Zero(), r.last_seen});
+    }
+    RobotLink& rk = robot_links_[static_cast<std::size_t>(nk.active)];
+    rk.H += robot_links_[static_cast<std::size_t>(nodes_[static_cast<std::size_t>(drop)].active)].H;
+    rk.last_seen = std::max(rk.last_seen, robot_links_[static_cast<std::size_t>(nodes_[static_cast<std::size_t>(drop)].active)].last_seen);
+  }
+  deleteLandmark(drop);
+}
+
+void SeifStore::deleteLandmark(int slot) {
+  // Unlink it from its neighbours and the robot.
+  for (const Link& l : nodes_[static_cast<std::size_t>(slot)].links) {
+    std::vector<Link>& back = nodes_[static_cast<std::size_t>(l.slot)].links;
+    back.erase(std::find_if(back.begin(), back.end(), [&](const Link& b) { return b.slot == slot; }));
+    --landmark_links_;
+  }
+  if (nodes_[static_cast<std::size_t>(slot)].active >= 0) removeRobotLink(slot);
+  // The last slot moves into its place.
+  const int last = size() - 1;
+  if (slot != last) {
+    nodes_[static_cast<std::size_t>(slot)] = std::move(nodes_.back());
+    ids_[static_cast<std::size_t>(slot)] = ids_.back();
+    Node& moved = nodes_[static_cast<std::size_t>(slot)];
+    for (const Link& l : moved.links) {
+      for (Link& b : nodes_[static_cast<std::size_t>(l.slot)].links) {
+        if (b.slot == last) b.slot = slot;
+      }
+    }
+    if (moved.active >= 0) robot_links_[static_cast<std::size_t>(moved.active)].slot = slot;
+  }
+  nodes_.pop_back();
+  ids_.pop_back();
+}
+
 void SeifStore::detachRobot(const Vec3& mu_x) {
   for (const RobotLink& l : robot_links_) nodes_[static_cast<std::size_t>(l.slot)].active = -1;
   robot_links_.clear();

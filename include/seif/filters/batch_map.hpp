@@ -70,6 +70,9 @@ class BatchMap final : public SlamFilter {
 
   Marginal marginal(std::span<const int> landmarks, bool pose = true,
                     MarginalMode mode = MarginalMode::Exact) const override;
+  /// Not supported: the batch keeps every measurement (InvalidArgument).
+  void removeLandmark(int id) override;
+  void mergeLandmarks(int keep, int drop) override;
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
   const std::vector<int>& landmarkIds() const override { return book_.ids(); }

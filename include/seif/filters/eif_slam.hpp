@@ -25,6 +25,8 @@ class EifSlam final : public SlamFilter {
   Marginal marginal(std::span<const int> landmarks, bool pose = true,
                     MarginalMode mode = MarginalMode::Exact) const override;
 
+  void removeLandmark(int id) override;
+  void mergeLandmarks(int keep, int drop) override;
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
   const std::vector<int>& landmarkIds() const override { return book_.ids(); }
@@ -48,6 +50,8 @@ class EifSlam final : public SlamFilter {
 
  private:
   void recoverMean();
+  /// Deletes slot `slot`'s rows and columns of H, b, mu, the last slot's moving into them.
+  void deleteSlot(int slot);
   void applyPlan(std::span<const PlannedObservation> plan, const MeasurementModel& sensor);
   const Eigen::LLT<Eigen::MatrixXd>& factor() const;
 

@@ -24,6 +24,8 @@ class EkfSlam final : public SlamFilter {
   Marginal marginal(std::span<const int> landmarks, bool pose = true,
                     MarginalMode mode = MarginalMode::Exact) const override;
 
+  void removeLandmark(int id) override;
+  void mergeLandmarks(int keep, int drop) override;
   Pose2 pose() const override;
   Mat3 poseCovariance() const override { return sigma_.topLeftCorner<3, 3>(); }
   const std::vector<int>& landmarkIds() const override { return book_.ids(); }
@@ -49,6 +51,8 @@ class EkfSlam final : public SlamFilter {
 
  private:
   void addLandmark(const Observation& z, const MeasurementModel& sensor);
+  /// Deletes slot `slot`'s rows and columns, the last slot's moving into them.
+  void deleteSlot(int slot);
   void applyPlan(std::span<const PlannedObservation> plan, const MeasurementModel& sensor);
 
   FilterConfig config_;

@@ -93,6 +93,12 @@ class SeifSlam final : public SlamFilter {
   Marginal marginal(std::span<const int> landmarks, bool pose = true,
                     MarginalMode mode = MarginalMode::Exact) const override;
 
+  /// SeifStore::marginalizeLandmark (exact; O(d^2) in its d neighbours). Landmarks linked to
+  /// it that become linked to the robot count as active: past the bound they are sparsified.
+  void removeLandmark(int id) override;
+  /// SeifStore::mergeLandmarks (exact, O(d)); then as removeLandmark. The mean of `keep` is
+  /// relaxed once (exact mean: solved).
+  void mergeLandmarks(int keep, int drop) override;
   Pose2 pose() const override;
   Mat3 poseCovariance() const override;
   const std::vector<int>& landmarkIds() const override { return book_.ids(); }

@@ -88,6 +88,22 @@ class SeifStore {
   /// without information at mean mu_x: every robot link is dropped, H_xx = 0, b_x = 0.
   /// addObservation() then gives it its new information.
   void detachRobot(const Vec3& mu_x);
+  /// Marginalises landmark `slot` out exactly (the Schur complement over it, on its Markov
+  /// blanket): for neighbours a, c of it (the robot when it is active, its linked landmarks)
+  ///   H_ac -= H_al H_ll^-1 H_lc,   b_a -= H_al H_ll^-1 b_l,
+  /// linking its neighbours to each other (a landmark linked to it becomes active when it was
+  /// linked to the robot too); then deleteLandmark(slot). O(d^2) for d neighbours. Throws
+  /// NumericError when H_ll is not positive definite.
+  void marginalizeLandmark(int slot);
+  /// Merges landmark `drop` into `keep` (two slots of one landmark): the posterior on
+  /// y_keep = y_drop, H' = T^T H T and b' = T^T b with T copying y_keep into y_drop's place:
+  /// drop's blocks, links and robot link are added into keep's; then deleteLandmark(drop).
+  /// keep's mean is left for the mean recovery. O(d) for d links.
+  void mergeLandmarks(int keep, int drop);
+  /// Deletes landmark `slot` and every link to it (no information moves: the callers above
+  /// first move it); the last slot takes its place (its neighbours' links and robot link
+  /// follow it). O(d) for the d links of the two.
+  void deleteLandmark(int slot);
   /// Sets the whole mean, in the state order.
   void setMean(const Eigen::VectorXd& mu);
 

@@ -145,6 +145,17 @@ class SlamFilter {
   PredictedMeasurement predictMeasurement(int id, const MeasurementModel& sensor, const Mat2& R,
                                           MarginalMode mode = MarginalMode::Exact) const;
 
+  /// Takes landmark `id` out of the map exactly: the posterior's marginal over everything
+  /// else (EKF: its rows and columns deleted; information form: the Schur complement over it,
+  /// which links its neighbours). The landmark in the last slot takes its place in
+  /// landmarkIds(). Throws UnknownLandmark. The batch MAP does not remove (InvalidArgument).
+  virtual void removeLandmark(int id) = 0;
+  /// Merges landmark `drop` into `keep` when both turn out to be one landmark: the posterior
+  /// conditioned on y_keep = y_drop (information form: H' = T^T H T, b' = T^T b, drop's rows
+  /// and columns added into keep's), then `drop` leaves the map as removeLandmark() says.
+  /// keep's first estimate stays. Throws UnknownLandmark, InvalidArgument when keep == drop.
+  virtual void mergeLandmarks(int keep, int drop) = 0;
+
   virtual Pose2 pose() const = 0;
   /// Marginal covariances. EKF: read off its covariance, O(1). EIF: a solve with its cached
   /// dense factor, O(N^2). SEIF: exact, from the sparse Cholesky factor of H and its selected
