@@ -11,18 +11,6 @@
 
 namespace seif {
 
-namespace {
-// ESEIF relocalisation (Walter et al. 2007): the largest condition number of z_beta's
-// stacked pose information J_x^T R^-1 J_x it accepts.
-constexpr double kMaxRelocalizationCondition = 1e6;
-constexpr int kRelocalizationIterations = 20;
-enum Role : unsigned char { kAlpha, kBeta, kRejected };
-
-bool wellConditioned(const Mat3& A) {
-  const Vec3 ev = Eigen::SelfAdjointEigenSolver<Mat3>(A, Eigen::EigenvaluesOnly).eigenvalues();
-  return ev(0) > 0.0 && ev(2) < kMaxRelocalizationCondition * ev(0);
-}
-}  // namespace
 
 SeifOptions::Mean SeifOptions::parseMean(std::string_view s) {
   if (s == "amortized") return Mean::Amortized;
@@ -108,47 +96,6 @@ void SeifSlam::motionUpdate(const MotionIncrement& increment) {
   invalidateFactor();
 }
 
-void SeifSlam::recoverMean() {
-  // §2: one block Gauss-Seidel pass over the active landmarks, the robot and K others.
-  // In a map much larger than the caches, relaxing a random landmark costs three dependent
-  // cache misses (SeifStore::relaxLandmarks). The K landmarks are therefore drawn first (the
-  // same draws in the same order: the result is unchanged) and prefetched in chunks, so
-  // that their misses overlap instead of adding up: at 10^6 landmarks this phase then takes
-  // ~20 % less (it is still the one part of a step whose time grows with the map, through
-  // cache and TLB misses).
-  constexpr int kChunk = 16;
-  std::array<int, kChunk> picks{};
-  const int n = store_.size();
-  std::uniform_int_distribution<int> pick(0, std::max(0, n - 1));
-  // K is capped at the map's size: relaxing a landmark twice in one pass is pointless.
-  const int random = std::min(options_.relax, n);
-  auto draw = [&](int count) {
-    for (int i = 0; i < count; ++i) {
-      const int slot = options_.relax_order == SeifOptions::RelaxOrder::Cyclic
-                           ? static_cast<int>(relax_cursor_++ % static_cast<std::size_t>(n))
-                           : pick(rng_);
-      picks[static_cast<std::size_t>(i)] = slot;
-      store_.prefetch(slot);
-    }
-  };
-  int chunk = std::min(random, kChunk);
-  draw(chunk);
-  store_.relaxActive();
-  for (int done = 0; done < random;) {
-    store_.relaxLandmarks(std::span<const int>(picks.data(), static_cast<std::size_t>(chunk)));
-    done += chunk;
-    chunk = std::min(random - done, kChunk);
-    draw(chunk);
-  }
-}
-
-void SeifSlam::relaxMean(int sweeps) {
-  for (int s = 0; s < sweeps; ++s) {
-    store_.relaxRobot();
-    for (int i = 0; i < store_.size(); ++i) store_.relaxLandmark(i);
-  }
-}
-
 void SeifSlam::measurementUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
   invalidateFactor();
   // §3, paper eq. (21-22): every observation linearised at the current mean (with FEJ:
@@ -167,43 +114,6 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
     if (static_cast<int>(store_.robotLinks().size()) >= kMaxLocalLandmarks) sparsify();
   }
   book_.commit();
-}
-
-void SeifSlam::sparsify() { deactivateSurplus(false); }
-
-void SeifSlam::deactivateSurplus(bool solve_active_mean_first) {
-  // §4, paper eq. (44-51): deactivate the surplus Y0, keep Y+.
-  const int k = static_cast<int>(store_.robotLinks().size());
-  const int drop = k - options_.max_active;
-  if (drop <= 0) return;
-  if (options_.sparsify == SeifOptions::Sparsify::Eseif) ++eseif_fallbacks_;
-  ranking_.clear();
-  for (const SeifStore::RobotLink& l : store_.robotLinks()) {
-    double score;
-    if (options_.deactivate == SeifOptions::Deactivate::Oldest) {
-      score = static_cast<double>(l.last_seen);
-    } else {  // strength of the link on the normalised information matrix
-      const Vec3 dx = store_.robotInformation().diagonal().cwiseSqrt().cwiseInverse();
-      const Vec2 dl = store_.node(l.slot).H.diagonal().cwiseSqrt().cwiseInverse();
-      score = (dx.asDiagonal() * l.H * dl.asDiagonal()).norm();
-    }
-    ranking_.emplace_back(score, l.slot);
-  }
-  std::sort(ranking_.begin(), ranking_.end());  // weakest (or oldest) first
-  order_.clear();
-  for (int i = drop; i < k; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y+
-  for (int i = 0; i < drop; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y0
-  store_.gather(order_);
-  if (solve_active_mean_first) store_.solveLocalMean();
-  LocalMatrix& H = store_.localH();
-  const double residual = sparsifyInformation(H, store_.localB(), store_.localMean(), drop);
-  last_sparsification_residual_ = std::max(last_sparsification_residual_, residual);
-  const Eigen::Index y0 = H.rows() - 2 * drop;
-  H.block(0, y0, 3, 2 * drop).setZero();
-  H.block(y0, 0, 2 * drop, 3).setZero();
-  store_.scatter();
-  invalidateFactor();
-  for (int i = 0; i < drop; ++i) store_.removeRobotLink(ranking_[static_cast<std::size_t>(i)].second);
 }
 
 void SeifSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
@@ -225,134 +135,6 @@ void SeifSlam::update(std::span<const Observation> observations, const Measureme
   // active landmarks, and the sparsification's b~ = b + (H~ - H) mu is right only for their
   // exact mean: it re-solves that block first, on the block it gathers anyway.
   deactivateSurplus(amortized && book_order);
-}
-
-// ---------------------------------------------------------------- ESEIF ---------------
-
-void SeifSlam::eseifUpdate(std::span<const Observation> z, const MeasurementModel& sensor) {
-  // Walter, Eustice, Leonard 2007: when z would activate more than max_active landmarks,
-  // z_alpha updates the filter (eq. 21-22), the robot is marginalised out and relocalised
-  // from z_beta alone. H stays exactly sparse; information is dropped, never invented.
-  const bool triggered = exceedsActive(z);
-  const bool split = triggered && partitionObservations(z, sensor);
-  measurementUpdate(triggered ? std::span<const Observation>(alpha_) : z, sensor);
-  bool relocalized = false;
-  if (split) {
-    relocalized = relocalizeRobot(sensor);
-    if (relocalized) {
-      ++eseif_relocalizations_;
-    } else {
-      measurementUpdate(beta_, sensor);  // no pose from z_beta: an ordinary update
-    }
-  }
-  if (options_.mean == SeifOptions::Mean::Exact) {
-    recoverExactMean();
-  } else if (options_.recovery == SeifOptions::Recovery::AfterMeasurement) {
-    recoverMean();
-  }
-  // Without a relocalisation the surplus stays active until one is possible (measurementUpdate()
-  // conditions it away, counted in eseifFallbacks(), only when the local block is full).
-  if (static_cast<int>(store_.robotLinks().size()) > options_.max_active) ++eseif_deferrals_;
-}
-
-bool SeifSlam::exceedsActive(std::span<const Observation> z) const {
-  int active = static_cast<int>(store_.robotLinks().size());
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    const int slot = book_.find(z[i].landmark);
-    if (slot >= 0 && store_.node(slot).active >= 0) continue;
-    const bool repeated = std::any_of(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(i),
-                                      [&](const Observation& o) { return o.landmark == z[i].landmark; });
-    if (!repeated) ++active;
-  }
-  return active > options_.max_active;
-}
-
-bool SeifSlam::partitionObservations(std::span<const Observation> z, const MeasurementModel& sensor) {
-  // Candidates for z_beta: observations of mapped landmarks, the best informed (largest
-  // trace of H_ll) first. z_beta takes eseif_beta of them, or more until their stacked
-  // sum J_x^T R^-1 J_x fixes all three pose dof, well conditioned; at most max_active, so
-  // that the relocalised robot's active set is within bounds.
-  alpha_.clear();
-  beta_.clear();
-  beta_slots_.clear();
-  ranking_.clear();
-  roles_.assign(z.size(), kAlpha);
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    const int slot = book_.find(z[i].landmark);
-    if (slot >= 0) ranking_.emplace_back(-store_.node(slot).H.trace(), static_cast<int>(i));
-  }
-  std::sort(ranking_.begin(), ranking_.end());
-  const auto max_beta = static_cast<std::size_t>(options_.max_active);
-  const auto target = std::min(static_cast<std::size_t>(options_.eseif_beta), max_beta);
-  const Pose2 x = store_.robotMean();
-  Mat3 A = Mat3::Zero();
-  bool found = false;
-  for (const auto& [score, i] : ranking_) {
-    if ((found && beta_.size() >= target) || beta_.size() == max_beta) break;
-    const Observation& o = z[static_cast<std::size_t>(i)];
-    const int slot = book_.find(o.landmark);
-    if (std::find(beta_slots_.begin(), beta_slots_.end(), slot) != beta_slots_.end()) continue;
-    const Mat2 Z_inv = sensor.noise(o).inverse();
-    if (book_.rejects(sensor, x, store_.node(slot).mu, o)) {
-      roles_[static_cast<std::size_t>(i)] = kRejected;
-      continue;
-    }
-    Mat23 J_x;
-    sensor.predict(x, store_.node(slot).mu, &J_x);
-    A.noalias() += J_x.transpose() * Z_inv * J_x;
-    roles_[static_cast<std::size_t>(i)] = kBeta;
-    beta_.push_back(o);
-    beta_slots_.push_back(slot);
-    found = beta_.size() >= 2 && wellConditioned(A);
-  }
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    if (roles_[i] == kAlpha || (roles_[i] == kBeta && !found)) alpha_.push_back(z[i]);
-  }
-  if (!found) {
-    beta_.clear();
-    beta_slots_.clear();
-  }
-  return found;
-}
-
-bool SeifSlam::relocalizeRobot(const MeasurementModel& sensor) {
-  // The robot's mean given z_alpha (re-solved on the block the marginalisation gathers) is
-  // the start of a Gauss-Newton fit of the pose to z_beta and the landmarks' means.
-  store_.gatherActive();
-  store_.solveLocalMean();
-  Pose2 x = store_.robotMean();
-  Mat3 A = Mat3::Zero();
-  bool converged = false;
-  for (int it = 0; it < kRelocalizationIterations && !converged; ++it) {
-    A.setZero();
-    Vec3 g = Vec3::Zero();
-    for (std::size_t k = 0; k < beta_.size(); ++k) {
-      Mat23 J_x;
-      const Vec2 zhat = sensor.predict(x, store_.node(beta_slots_[k]).mu, &J_x);
-      const Eigen::Matrix<double, 3, 2> JtZ = J_x.transpose() * sensor.noise(beta_[k]).inverse();
-      A.noalias() += JtZ * J_x;
-      g.noalias() += JtZ * sensor.residual(beta_[k].z, zhat);
-    }
-    const Vec3 dx = A.ldlt().solve(g);
-    if (!dx.allFinite()) return false;
-    x += dx;
-    converged = dx.norm() < 1e-9 * (1.0 + x.head<2>().norm());
-  }
-  if (!converged || !wellConditioned(A)) return false;
-  // Marginalisation: the Schur complement over the robot's Markov blanket, the active set.
-  marginalizeRobot(store_.localH(), store_.localB());
-  store_.scatter();
-  store_.detachRobot(x);
-  // Relocalisation: information over (x, m_beta) from z_beta alone, eq. (21-22) at the new
-  // pose; the robot is then linked to m_beta only.
-  for (std::size_t k = 0; k < beta_.size(); ++k) {
-    const int slot = beta_slots_[k];
-    const MeasurementInformation info =
-        measurementInformation(sensor, x, store_.node(slot).mu, beta_[k], sensor.noise(beta_[k]).inverse());
-    store_.addObservation(slot, info.H, info.b);
-  }
-  invalidateFactor();
-  return true;
 }
 
 // ---------------------------------------------------------------- removal and merge ---
@@ -395,9 +177,6 @@ const SparseMarginals& SeifSlam::factor() const {
   return *factor_;
 }
 
-Eigen::VectorXd SeifSlam::exactMean() const { return factor().solve(informationVector()); }
-
-void SeifSlam::recoverExactMean() { store_.setMean(exactMean()); }
 
 Eigen::MatrixXd SeifSlam::information() const { return Eigen::MatrixXd(sparseInformation()); }
 

@@ -115,17 +115,6 @@ class SeifSlam final : public SlamFilter {
   Eigen::MatrixXd covariance() const override;
   Eigen::MatrixXd information() const override;
 
-  // The paper's four steps, public so that each can be run and checked alone.
-  // predict(u) = motionUpdate(u); update(z) = recoverMean(); measurementUpdate(z); sparsify(),
-  // the sparsification first re-solving the robot-active block's mean on the block it gathers
-  // (Recovery::AfterMeasurement: recoverMean() after measurementUpdate(), no re-solve; exact
-  // mean: measurementUpdate(z); recoverExactMean(); sparsify()).
-  void motionUpdate(const MotionIncrement& increment);      ///< §1, Lemma 3
-  void recoverMean();                                      ///< §2, amortised, eq. (42)
-  void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
-  void measurementUpdate(std::span<const Observation> z,
-                         const MeasurementModel& sensor);  ///< §3, eq. (21-22)
-  void sparsify();                                         ///< §4, eq. (44-51)
 
   const SeifOptions& options() const { return options_; }
   const SeifStore& store() const { return store_; }
@@ -157,6 +146,19 @@ class SeifSlam final : public SlamFilter {
   Pose2 linearizationPose() const override { return store_.robotMean(); }
 
  private:
+  friend struct SeifStepsForTests;
+  // The paper's four steps, in the order update() runs them (private: out of order they
+  // break the filter's invariants; tests reach them through SeifStepsForTests).
+  // predict(u) = motionUpdate(u); update(z) = recoverMean(); measurementUpdate(z); sparsify(),
+  // the sparsification first re-solving the robot-active block's mean on the block it gathers
+  // (Recovery::AfterMeasurement: recoverMean() after measurementUpdate(), no re-solve; exact
+  // mean: measurementUpdate(z); recoverExactMean(); sparsify()).
+  void motionUpdate(const MotionIncrement& increment);      ///< §1, Lemma 3
+  void recoverMean();                                      ///< §2, amortised, eq. (42)
+  void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
+  void measurementUpdate(std::span<const Observation> z,
+                         const MeasurementModel& sensor);  ///< §3, eq. (21-22)
+  void sparsify();                                         ///< §4, eq. (44-51)
   /// The joint covariance of `vars` (-1: the robot, else slots) from H restricted to their
   /// Markov blanket (MarginalMode::Local).
   Eigen::MatrixXd localCovariance(std::span<const int> vars) const;

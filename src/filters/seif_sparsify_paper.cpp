@@ -1,0 +1,47 @@
+// The paper's sparsification (SeifOptions::Sparsify::Seif; algorithm.md §4, paper eq.
+// 44-51): the surplus of active landmarks is conditioned away. One file per sparsifier:
+// this one and seif_sparsify_eseif.cpp; SeifSlam::update chooses by SeifOptions::sparsify.
+#include <seif/filters/seif_slam.hpp>
+
+#include <algorithm>
+
+namespace seif {
+
+void SeifSlam::sparsify() { deactivateSurplus(false); }
+
+void SeifSlam::deactivateSurplus(bool solve_active_mean_first) {
+  // §4, paper eq. (44-51): deactivate the surplus Y0, keep Y+.
+  const int k = static_cast<int>(store_.robotLinks().size());
+  const int drop = k - options_.max_active;
+  if (drop <= 0) return;
+  if (options_.sparsify == SeifOptions::Sparsify::Eseif) ++eseif_fallbacks_;
+  ranking_.clear();
+  for (const SeifStore::RobotLink& l : store_.robotLinks()) {
+    double score;
+    if (options_.deactivate == SeifOptions::Deactivate::Oldest) {
+      score = static_cast<double>(l.last_seen);
+    } else {  // strength of the link on the normalised information matrix
+      const Vec3 dx = store_.robotInformation().diagonal().cwiseSqrt().cwiseInverse();
+      const Vec2 dl = store_.node(l.slot).H.diagonal().cwiseSqrt().cwiseInverse();
+      score = (dx.asDiagonal() * l.H * dl.asDiagonal()).norm();
+    }
+    ranking_.emplace_back(score, l.slot);
+  }
+  std::sort(ranking_.begin(), ranking_.end());  // weakest (or oldest) first
+  order_.clear();
+  for (int i = drop; i < k; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y+
+  for (int i = 0; i < drop; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y0
+  store_.gather(order_);
+  if (solve_active_mean_first) store_.solveLocalMean();
+  LocalMatrix& H = store_.localH();
+  const double residual = sparsifyInformation(H, store_.localB(), store_.localMean(), drop);
+  last_sparsification_residual_ = std::max(last_sparsification_residual_, residual);
+  const Eigen::Index y0 = H.rows() - 2 * drop;
+  H.block(0, y0, 3, 2 * drop).setZero();
+  H.block(y0, 0, 2 * drop, 3).setZero();
+  store_.scatter();
+  invalidateFactor();
+  for (int i = 0; i < drop; ++i) store_.removeRobotLink(ranking_[static_cast<std::size_t>(i)].second);
+}
+
+}  // namespace seif
