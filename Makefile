@@ -27,7 +27,9 @@ bench: build
 	@$(BUILD_DIR)/bin/seif_bench --benchmark_min_time=0.2
 
 # The whole test suite under AddressSanitizer + UndefinedBehaviorSanitizer, in its own
-# tree (build-sanitize; the benchmarks are not built). Any report fails the run; a
+# tree (build-sanitize; the benchmarks and the Python module are not built). Tests labelled
+# `slow` (the million-step soak, the golden outputs of a Release build) run once, in
+# `make test`, not again here. Any report fails the run; a
 # sanitized process exits 99, so a test expecting the CLI to fail (status 1 or 2) cannot
 # mistake a report for the failure it wanted.
 sanitize: export ASAN_OPTIONS = detect_leaks=1:halt_on_error=1:exitcode=99:print_stacktrace=1:check_initialization_order=1:strict_init_order=1:detect_stack_use_after_return=1
@@ -35,7 +37,7 @@ sanitize: export UBSAN_OPTIONS = halt_on_error=1:exitcode=99:print_stacktrace=1
 sanitize: deps
 	@cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEIF_SANITIZE=ON -DSEIF_BUILD_BENCH=OFF $(CMAKE_FLAGS) >/dev/null
 	@MAKEFLAGS= cmake --build build-sanitize -j $(JOBS) -- --no-print-directory
-	@cd build-sanitize && ctest --output-on-failure -j $(JOBS)
+	@cd build-sanitize && ctest --output-on-failure -j $(JOBS) -LE slow
 
 # libFuzzer targets of fuzz/ (clang, ASan + UBSan), built in build-fuzz, each run for
 # FUZZ_SECONDS seconds: executions, exec/s, CPU seconds and findings per target (scripts/fuzz).
