@@ -48,6 +48,7 @@ class EifSlam final : public SlamFilter {
   Pose2 linearizationPose() const override { return mu_.head<3>(); }
 
  private:
+  friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
   void recoverMean();
   const Eigen::LLT<Eigen::MatrixXd>& factor() const;
 

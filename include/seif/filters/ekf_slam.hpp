@@ -49,6 +49,7 @@ class EkfSlam final : public SlamFilter {
   Pose2 linearizationPose() const override { return mu_.head<3>(); }
 
  private:
+  friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
   void addLandmark(const Observation& z, const MeasurementModel& sensor);
 
   FilterConfig config_;

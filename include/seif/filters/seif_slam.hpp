@@ -150,6 +150,7 @@ class SeifSlam final : public SlamFilter {
   Pose2 linearizationPose() const override { return store_.robotMean(); }
 
  private:
+  friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
   /// The covariance block of `slot` (-1: the robot) from H restricted to its Markov blanket.
   Eigen::MatrixXd localCovariance(int slot) const;
   /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).
