@@ -2,6 +2,7 @@
 // twice: as it is, and with its header's payload size and checksum made to match (so that
 // the fuzzer reaches the payload's parser, not only the checksum). Either must load or
 // throw seif::DataError with a printable message; a loaded filter must then take a step.
+#include "fuzz_checkpoint.hpp"
 #include "fuzz_support.hpp"
 
 #include <seif/core/errors.hpp>
@@ -13,21 +14,6 @@
 #include <string>
 
 namespace {
-
-std::string resealed(std::string bytes) {
-  if (bytes.size() < 32) return bytes;
-  std::uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a 64 of the payload
-  for (std::size_t i = 32; i < bytes.size(); ++i) {
-    h ^= static_cast<unsigned char>(bytes[i]);
-    h *= 0x100000001b3ull;
-  }
-  const std::uint64_t size = bytes.size() - 32;
-  for (int i = 0; i < 8; ++i) {
-    bytes[static_cast<std::size_t>(16 + i)] = static_cast<char>((size >> (8 * i)) & 0xFF);
-    bytes[static_cast<std::size_t>(24 + i)] = static_cast<char>((h >> (8 * i)) & 0xFF);
-  }
-  return bytes;
-}
 
 void loadOrAbort(const std::string& bytes) {
   std::unique_ptr<seif::SlamFilter> filter;
@@ -59,6 +45,6 @@ void loadOrAbort(const std::string& bytes) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string bytes(reinterpret_cast<const char*>(data), size);
   loadOrAbort(bytes);
-  loadOrAbort(resealed(bytes));
+  loadOrAbort(seif::fuzz::resealed(bytes));
   return 0;
 }

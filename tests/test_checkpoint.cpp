@@ -1,6 +1,7 @@
 // Checkpoints (include/seif/filters/checkpoint.hpp): a run resumed from a checkpoint ends
 // bit-identical to the uninterrupted run; save-load-save is byte-identical; every damaged
 // file is a DataError naming it.
+#include "../fuzz/fuzz_checkpoint.hpp"
 #include "scenario.hpp"
 
 #include <seif/core/errors.hpp>
@@ -25,6 +26,7 @@ namespace seif {
 namespace {
 
 namespace fs = std::filesystem;
+using fuzz::resealed;
 using test::Scenario;
 
 /// The scenario with gross outliers (a 10 km range) added to some steps, so that the
@@ -130,23 +132,6 @@ INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
                                            "eif:linearization=fej", "seif:linearization=fej",
                                            "seif:deactivate=oldest,active=4", "seif:mean=exact",
                                            "seif:recovery=after-update,covariance=local"));
-
-/// The header's payload size and checksum made to match `bytes` again (a forged file).
-std::string resealed(std::string bytes) {
-  if (bytes.size() < 32) return bytes;
-  const std::string_view payload = std::string_view(bytes).substr(32);
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (const char c : payload) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 0x100000001b3ull;
-  }
-  const std::uint64_t size = payload.size();
-  for (int i = 0; i < 8; ++i) {
-    bytes[static_cast<std::size_t>(16 + i)] = static_cast<char>((size >> (8 * i)) & 0xFF);
-    bytes[static_cast<std::size_t>(24 + i)] = static_cast<char>((h >> (8 * i)) & 0xFF);
-  }
-  return bytes;
-}
 
 TEST(Checkpoint, RandomOrderDependsOnTheSavedEngine) {
   // The resume test can fail: the same checkpoint with the random engine restarted from

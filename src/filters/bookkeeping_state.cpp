@@ -70,4 +70,18 @@ void CheckpointAccess::readGate(ArchiveReader& in, OutlierGate& gate) {
   gate.rejected_ = static_cast<std::size_t>(in.u64("rejected observations"));
 }
 
+void CheckpointAccess::writeBookkeeping(ArchiveWriter& out, const OutlierGate& gate, const LandmarkIndex& index,
+                                        const std::optional<FirstEstimates>& fej) {
+  writeGate(out, gate);
+  writeIndex(out, index);
+  writeFirstEstimates(out, fej);
+}
+
+void CheckpointAccess::readBookkeeping(ArchiveReader& in, OutlierGate& gate, LandmarkIndex& index,
+                                       std::optional<FirstEstimates>& fej, const FilterConfig& config) {
+  readGate(in, gate);
+  index = readIndex(in);
+  readFirstEstimates(in, fej, config.linearization == Linearization::FirstEstimates, index.size());
+}
+
 }  // namespace seif

@@ -29,6 +29,11 @@ struct CheckpointAccess {
   static void readFirstEstimates(ArchiveReader& in, std::optional<FirstEstimates>& fej, bool expected, int landmarks);
   static void writeGate(ArchiveWriter& out, const OutlierGate& gate);
   static void readGate(ArchiveReader& in, OutlierGate& gate);
+  /// The three together, as the dense filters keep them (gate, index, first estimates).
+  static void writeBookkeeping(ArchiveWriter& out, const OutlierGate& gate, const LandmarkIndex& index,
+                               const std::optional<FirstEstimates>& fej);
+  static void readBookkeeping(ArchiveReader& in, OutlierGate& gate, LandmarkIndex& index,
+                              std::optional<FirstEstimates>& fej, const FilterConfig& config);
 
   // ---- the configuration a filter keeps (checkpoint.cpp)
   static const FilterConfig& config(const EkfSlam& f) { return f.config_; }

@@ -5,9 +5,7 @@ namespace seif {
 
 void CheckpointAccess::write(ArchiveWriter& out, const EifSlam& f) {
   out.section("eif");
-  writeGate(out, f.gate_);
-  writeIndex(out, f.index_);
-  writeFirstEstimates(out, f.fej_);
+  writeBookkeeping(out, f.gate_, f.index_, f.fej_);
   out.matrix(f.H_);
   out.vector(f.b_);
   out.vector(f.mu_);
@@ -15,9 +13,7 @@ void CheckpointAccess::write(ArchiveWriter& out, const EifSlam& f) {
 
 void CheckpointAccess::read(ArchiveReader& in, EifSlam& f) {
   in.section("eif");
-  readGate(in, f.gate_);
-  f.index_ = readIndex(in);
-  readFirstEstimates(in, f.fej_, f.config_.linearization == Linearization::FirstEstimates, f.index_.size());
+  readBookkeeping(in, f.gate_, f.index_, f.fej_, f.config_);
   const Eigen::Index n = LandmarkIndex::stateIndex(f.index_.size());
   f.H_ = in.matrix("eif information matrix", true);
   if (f.H_.rows() != n || f.H_.cols() != n) in.fail("eif information matrix does not match the map's size");

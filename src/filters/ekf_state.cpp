@@ -5,18 +5,14 @@ namespace seif {
 
 void CheckpointAccess::write(ArchiveWriter& out, const EkfSlam& f) {
   out.section("ekf");
-  writeGate(out, f.gate_);
-  writeIndex(out, f.index_);
-  writeFirstEstimates(out, f.fej_);
+  writeBookkeeping(out, f.gate_, f.index_, f.fej_);
   out.vector(f.mu_);
   out.matrix(f.sigma_);
 }
 
 void CheckpointAccess::read(ArchiveReader& in, EkfSlam& f) {
   in.section("ekf");
-  readGate(in, f.gate_);
-  f.index_ = readIndex(in);
-  readFirstEstimates(in, f.fej_, f.config_.linearization == Linearization::FirstEstimates, f.index_.size());
+  readBookkeeping(in, f.gate_, f.index_, f.fej_, f.config_);
   const Eigen::Index n = LandmarkIndex::stateIndex(f.index_.size());
   f.mu_ = in.vector("ekf mean", true);
   if (f.mu_.size() != n) in.fail("ekf mean has " + std::to_string(f.mu_.size()) + " entries, expected " + std::to_string(n));
