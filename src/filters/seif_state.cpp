@@ -60,6 +60,8 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
   in.fixed("robot information", s.H_xx_, true);
   in.fixed("robot information vector", s.b_x_, true);
   in.fixed("robot mean", s.mu_x_, true);
+  // Information is positive on its diagonal (deactivation ranks links by it, sqrt'd).
+  if (!(s.H_xx_.diagonal().minCoeff() > 0.0)) in.fail("robot information is not positive on its diagonal");
   const std::size_t nodes = in.count("node count", 3 * 9 + 9 + 9);
   if (nodes != static_cast<std::size_t>(size)) {
     in.fail(std::to_string(nodes) + " nodes for " + std::to_string(size) + " landmarks");
@@ -70,6 +72,7 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
   for (std::size_t a = 0; a < nodes; ++a) {
     SeifStore::Node& n = s.nodes_[a];
     in.fixed("landmark information", n.H, true);
+    if (!(n.H.diagonal().minCoeff() > 0.0)) in.fail("landmark information is not positive on its diagonal");
     in.fixed("landmark information vector", n.b, true);
     in.fixed("landmark mean", n.mu, true);
     n.active = static_cast<int>(in.i64In("active position", -1, kMaxLocalLandmarks - 1));
