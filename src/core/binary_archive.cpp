@@ -161,7 +161,7 @@ void ArchiveReader::expectTag(std::uint8_t t, const char* what) {
   if (remaining() < 1) fail(std::string("truncated before ") + what);
   const auto found = static_cast<std::uint8_t>(bytes_[pos_]);
   if (found != t) {
-    fail(std::string(what) + ": expected a " + tagName(t) + ", found a " + tagName(found) + " (tag " +
+    fail(std::string(what) + ": expected type " + tagName(t) + ", found type " + tagName(found) + " (tag " +
          std::to_string(found) + ")");
   }
   ++pos_;
