@@ -67,7 +67,7 @@ inline bool printable(std::string_view message) {
 }
 
 /// Opens and drains a source; aborts on a broken promise or an exception other than a
-/// printable DataError (std::invalid_argument from the options cannot happen: none given).
+/// printable DataError (seif::InvalidArgument from the options cannot happen: none given).
 template <class Open>
 void drainOrAbort(Open&& open) {
   try {

@@ -49,6 +49,7 @@ class EifSlam final : public SlamFilter {
   Pose2 linearizationPose() const override { return mu_.head<3>(); }
 
  private:
+  friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
   void recoverMean();
   /// Deletes slot `slot`'s rows and columns of H, b, mu, the last slot's moving into them.
   void deleteSlot(int slot);

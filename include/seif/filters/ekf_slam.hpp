@@ -50,6 +50,7 @@ class EkfSlam final : public SlamFilter {
   Pose2 linearizationPose() const override { return mu_.head<3>(); }
 
  private:
+  friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
   void addLandmark(const Observation& z, const MeasurementModel& sensor);
   /// Deletes slot `slot`'s rows and columns, the last slot's moving into them.
   void deleteSlot(int slot);

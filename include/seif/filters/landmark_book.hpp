@@ -101,6 +101,7 @@ class LandmarkBook {
   void removeSlot(int slot);
 
  private:
+  friend struct CheckpointAccess;  // checkpoints: src/filters/bookkeeping_state.cpp
   std::string filter_;
   Linearization linearization_;
   OutlierGate gate_;

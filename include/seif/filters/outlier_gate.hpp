@@ -36,6 +36,7 @@ class OutlierGate {
   double sigmas() const { return sigmas_; }
 
  private:
+  friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
   double sigmas_;
   double threshold_;  // sigmas^2
   std::size_t rejected_ = 0;

@@ -146,6 +146,7 @@ class SeifSlam final : public SlamFilter {
   Pose2 linearizationPose() const override { return store_.robotMean(); }
 
  private:
+  friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
   friend struct SeifStepsForTests;
   // The paper's four steps, in the order update() runs them (private: out of order they
   // break the filter's invariants; tests reach them through SeifStepsForTests).

@@ -145,6 +145,7 @@ class SeifStore {
   void relaxLandmarks(std::span<const int> slots);
 
  private:
+  friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
   Mat2* link(int a, int c);
   void gatherListed();  // gather() of gathered_
 

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <filesystem>
 #include <memory>
 #include <span>
 #include <string>
@@ -17,6 +18,8 @@
 #include <vector>
 
 namespace seif {
+
+struct CheckpointExtras;  // filters/checkpoint.hpp
 
 /// Where a filter evaluates its Jacobians (--linearization).
 enum class Linearization {
@@ -119,6 +122,11 @@ class SlamFilter {
   virtual std::vector<Mat3> smoothedTrajectoryCovariances() const { return {}; }
   /// True for a smoother: its estimates mean something only after finish().
   virtual bool smoother() const { return false; }
+
+  /// Writes this filter's whole state to a checkpoint (filters/checkpoint.hpp: saveCheckpoint;
+  /// seif::load reads it back). Throws InvalidArgument for the batch MAP smoother.
+  void save(const std::filesystem::path& path) const;
+  void save(const std::filesystem::path& path, const CheckpointExtras& extras) const;
 
   const MotionModel& motionModel() const { return *motion_; }
   const MeasurementModel& sensorModel() const { return *sensor_; }

@@ -1,0 +1,159 @@
+// SeifSlam's and SeifStore's state in a checkpoint (checkpoint_access.hpp): every node in
+// slot order with its links in their own vector order, the robot links in theirs, the
+// counters and the random engine's exact state.
+#include "checkpoint_access.hpp"
+
+#include <algorithm>
+#include <sstream>
+#include <string>
+
+namespace seif {
+
+namespace {
+
+// Bytes of the smallest stored link (slot, H) and robot link (slot, H, last_seen).
+constexpr std::size_t kLinkBytes = 9 + 9 + 4 * 8;
+constexpr std::size_t kRobotLinkBytes = 9 + 9 + 6 * 8 + 9;
+
+std::string engineState(const std::mt19937_64& rng) {
+  std::ostringstream os;
+  os << rng;
+  return os.str();
+}
+
+}  // namespace
+
+void CheckpointAccess::write(ArchiveWriter& out, const SeifStore& s) {
+  out.section("seif-store");
+  writeIndex(out, s.ids_);
+  out.fixed(s.H_xx_);
+  out.fixed(s.b_x_);
+  out.fixed(s.mu_x_);
+  out.count(s.nodes_.size());
+  for (const SeifStore::Node& n : s.nodes_) {
+    out.fixed(n.H);
+    out.fixed(n.b);
+    out.fixed(n.mu);
+    out.i64(n.active);
+    out.count(n.links.size());
+    for (const SeifStore::Link& l : n.links) {
+      out.i64(l.slot);
+      out.fixed(l.H);
+    }
+  }
+  out.count(s.robot_links_.size());
+  for (const SeifStore::RobotLink& l : s.robot_links_) {
+    out.i64(l.slot);
+    out.fixed(l.H);
+    out.i64(l.last_seen);
+  }
+  out.i64(s.step_);
+  out.u64(s.blocks_touched_);
+  out.u64(s.landmark_links_);
+  out.u64(s.max_landmark_links_);
+}
+
+void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
+  in.section("seif-store");
+  std::unordered_map<int, int> slots;
+  readIndex(in, s.ids_, slots);
+  const int size = static_cast<int>(s.ids_.size());
+  in.fixed("robot information", s.H_xx_, true);
+  in.fixed("robot information vector", s.b_x_, true);
+  in.fixed("robot mean", s.mu_x_, true);
+  // Information is positive on its diagonal (deactivation ranks links by it, sqrt'd).
+  if (!(s.H_xx_.diagonal().minCoeff() > 0.0)) in.fail("robot information is not positive on its diagonal");
+  const std::size_t nodes = in.count("node count", 3 * 9 + 9 + 9);
+  if (nodes != static_cast<std::size_t>(size)) {
+    in.fail(std::to_string(nodes) + " nodes for " + std::to_string(size) + " landmarks");
+  }
+  s.nodes_.clear();
+  s.nodes_.resize(nodes);
+  std::size_t link_ends = 0;
+  for (std::size_t a = 0; a < nodes; ++a) {
+    SeifStore::Node& n = s.nodes_[a];
+    in.fixed("landmark information", n.H, true);
+    if (!(n.H.diagonal().minCoeff() > 0.0)) in.fail("landmark information is not positive on its diagonal");
+    in.fixed("landmark information vector", n.b, true);
+    in.fixed("landmark mean", n.mu, true);
+    n.active = static_cast<int>(in.i64In("active position", -1, kMaxLocalLandmarks - 1));
+    const std::size_t links = in.count("link count", kLinkBytes);
+    n.links.reserve(links);
+    for (std::size_t k = 0; k < links; ++k) {
+      SeifStore::Link l;
+      l.slot = static_cast<int>(in.i64In("linked slot", 0, size - 1));
+      if (static_cast<std::size_t>(l.slot) == a) in.fail("a landmark linked to itself");
+      if (std::any_of(n.links.begin(), n.links.end(), [&](const SeifStore::Link& o) { return o.slot == l.slot; })) {
+        in.fail("a link stored twice");
+      }
+      in.fixed("link information", l.H, true);
+      n.links.push_back(l);
+    }
+    link_ends += links;
+  }
+  for (std::size_t a = 0; a < nodes; ++a) {
+    for (const SeifStore::Link& l : s.nodes_[a].links) {
+      if (!s.findLink(l.slot, static_cast<int>(a))) in.fail("a landmark link without its reverse");
+    }
+  }
+  const std::size_t robot_links = in.count("robot link count", kRobotLinkBytes);
+  if (robot_links > static_cast<std::size_t>(kMaxLocalLandmarks)) {
+    in.fail(std::to_string(robot_links) + " active landmarks, more than a local block holds");
+  }
+  s.robot_links_.clear();
+  for (std::size_t k = 0; k < robot_links; ++k) {
+    SeifStore::RobotLink l;
+    l.slot = static_cast<int>(in.i64In("active slot", 0, size - 1));
+    if (s.nodes_[static_cast<std::size_t>(l.slot)].active != static_cast<int>(k)) {
+      in.fail("robot link " + std::to_string(k) + " disagrees with its landmark's active position");
+    }
+    in.fixed("robot link information", l.H, true);
+    l.last_seen = static_cast<long>(in.i64("last seen"));
+    s.robot_links_.push_back(l);
+  }
+  const auto active = static_cast<std::size_t>(
+      std::count_if(s.nodes_.begin(), s.nodes_.end(), [](const SeifStore::Node& n) { return n.active >= 0; }));
+  if (active != robot_links) in.fail("active landmarks without a robot link");
+  s.step_ = static_cast<long>(in.i64("step"));
+  s.blocks_touched_ = static_cast<std::size_t>(in.u64("blocks touched"));
+  s.landmark_links_ = static_cast<std::size_t>(in.u64("landmark links"));
+  if (2 * s.landmark_links_ != link_ends) in.fail("the landmark link count disagrees with the links stored");
+  s.max_landmark_links_ = static_cast<std::size_t>(in.u64("most links of a landmark"));
+}
+
+void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
+  out.section("seif");
+  // The book's index is the store's (written with it).
+  writeGate(out, f.book_.gate_);
+  write(out, f.store_);
+  writeFirstEstimates(out, f.book_.fej_);
+  out.str(engineState(f.rng_));
+  out.u64(f.relax_cursor_);
+  out.f64(f.last_sparsification_residual_);
+  out.u64(f.eseif_relocalizations_);
+  out.u64(f.eseif_deferrals_);
+  out.u64(f.eseif_fallbacks_);
+}
+
+void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
+  in.section("seif");
+  readGate(in, f.book_.gate_);
+  read(in, f.store_);
+  f.book_.ids_ = f.store_.ids();
+  f.book_.slot_.clear();
+  for (int s = 0; s < f.book_.size(); ++s) f.book_.slot_.emplace(f.book_.ids_[static_cast<std::size_t>(s)], s);
+  readFirstEstimates(in, f.book_.fej_, f.book_.linearization() == Linearization::FirstEstimates, f.store_.size());
+  const std::string rng = in.str("random engine state");
+  std::istringstream is(rng);
+  is >> f.rng_;
+  // Only the canonical text (what operator<< writes) is accepted: save-load-save is byte-identical.
+  if (is.fail() || engineState(f.rng_) != rng) in.fail("invalid random engine state");
+  f.relax_cursor_ = static_cast<std::size_t>(in.u64("relaxation cursor"));
+  f.last_sparsification_residual_ = in.f64("last sparsification residual");
+  f.eseif_relocalizations_ = static_cast<std::size_t>(in.u64("eseif relocalizations"));
+  f.eseif_deferrals_ = static_cast<std::size_t>(in.u64("eseif deferrals"));
+  f.eseif_fallbacks_ = static_cast<std::size_t>(in.u64("eseif fallbacks"));
+  f.invalidateFactor();
+}
+
+}  // namespace seif

@@ -1,0 +1,365 @@
+// Checkpoints (include/seif/filters/checkpoint.hpp): a run resumed from a checkpoint ends
+// bit-identical to the uninterrupted run; save-load-save is byte-identical; every damaged
+// file is a DataError naming it.
+#include "../fuzz/fuzz_checkpoint.hpp"
+#include "scenario.hpp"
+
+#include <seif/core/errors.hpp>
+#include <seif/filters/checkpoint.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/filters/seif_slam.hpp>
+#include <seif/models/ackermann_model.hpp>
+#include <seif/models/cartesian.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <random>
+#include <sstream>
+#include <unistd.h>
+
+namespace seif {
+namespace {
+
+namespace fs = std::filesystem;
+using fuzz::resealed;
+using test::Scenario;
+
+/// The scenario with gross outliers (a 10 km range) added to some steps, so that the
+/// outlier gate's counter is part of the state.
+Scenario scenarioWithOutliers(std::uint64_t seed, int landmarks, int steps) {
+  Scenario s = test::makeScenario(seed, landmarks, steps);
+  for (std::size_t k = 5; k < s.steps.size(); k += 7) {
+    if (s.steps[k].observations.empty()) continue;
+    Observation o = s.steps[k].observations.front();
+    o.z.x() += 1e4;
+    s.steps[k].observations.push_back(o);
+  }
+  return s;
+}
+
+struct Outcome {
+  Eigen::VectorXd mean;
+  Mat3 pose_covariance;
+  std::vector<int> ids;
+  FilterStats stats;
+  std::size_t rejected = 0;
+  std::size_t eseif[3] = {0, 0, 0};
+};
+
+Outcome outcome(const SlamFilter& f) {
+  Outcome o;
+  o.mean = f.mean();
+  o.pose_covariance = f.poseCovariance();
+  o.ids = f.landmarkIds();
+  o.stats = f.stats();
+  o.rejected = f.rejectedObservations();
+  if (const auto* seif = dynamic_cast<const SeifSlam*>(&f)) {
+    o.eseif[0] = seif->eseifRelocalizations();
+    o.eseif[1] = seif->eseifDeferrals();
+    o.eseif[2] = seif->eseifFallbacks();
+  }
+  return o;
+}
+
+template <class M>
+bool sameBits(const M& a, const M& b) {
+  return a.rows() == b.rows() && a.cols() == b.cols() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
+}
+
+void expectIdentical(const Outcome& a, const Outcome& b, const std::string& what) {
+  EXPECT_TRUE(sameBits(a.mean, b.mean)) << what << ": mean differs";
+  EXPECT_TRUE(sameBits(a.pose_covariance, b.pose_covariance)) << what << ": pose covariance differs";
+  EXPECT_EQ(a.ids, b.ids) << what;
+  EXPECT_EQ(a.stats.landmarks, b.stats.landmarks) << what;
+  EXPECT_EQ(a.stats.links, b.stats.links) << what;
+  EXPECT_EQ(a.stats.robot_links, b.stats.robot_links) << what;
+  EXPECT_EQ(a.stats.max_landmark_links, b.stats.max_landmark_links) << what;
+  EXPECT_EQ(a.stats.blocks_touched, b.stats.blocks_touched) << what;
+  EXPECT_EQ(a.rejected, b.rejected) << what;
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(a.eseif[i], b.eseif[i]) << what << ": eseif counter " << i;
+}
+
+/// Runs `spec` over `s`; after each step in `resume_after` the filter is saved, dropped and
+/// loaded back (save-load-save must give the same bytes). With `mid_step`, also once between
+/// a predict and its update.
+Outcome run(const std::string& spec, const Scenario& s, const std::set<std::size_t>& resume_after,
+            bool mid_step = false) {
+  std::unique_ptr<SlamFilter> f = makeFilter(spec, s.start, test::configFor(s));
+  auto reload = [&](std::size_t k) {
+    const CheckpointExtras extras{k, {{"spec", spec}, {"step", std::to_string(k)}}};
+    const std::string bytes = saveToBytes(*f, extras);
+    f.reset();
+    CheckpointExtras loaded;
+    f = loadFromBytes(bytes, "memory", &loaded);
+    EXPECT_EQ(loaded, extras);
+    EXPECT_TRUE(saveToBytes(*f, extras) == bytes) << spec << ": save-load-save differs after step " << k;
+  };
+  for (std::size_t k = 0; k < s.steps.size(); ++k) {
+    f->predict(s.steps[k].u);
+    if (mid_step && k == s.steps.size() / 2) reload(k);
+    f->update(s.steps[k].observations);
+    if (resume_after.count(k + 1)) reload(k + 1);
+  }
+  return outcome(*f);
+}
+
+class CheckpointResume : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CheckpointResume, ResumedRunIsBitIdentical) {
+  const std::string spec = GetParam();
+  const Scenario s = scenarioWithOutliers(11, 40, 90);
+  const Outcome straight = run(spec, s, {});
+  ASSERT_GT(straight.rejected, 0u) << "the scenario should exercise the outlier gate";
+  ASSERT_GT(straight.ids.size(), 10u);
+  if (spec.find("eseif") != std::string::npos) {
+    ASSERT_GT(straight.eseif[0], 0u) << "the scenario should make the ESEIF relocalise";
+  } else if (spec.rfind("seif", 0) == 0) {
+    ASSERT_GT(straight.stats.links, straight.stats.robot_links) << "the SEIF should have landmark links";
+  }
+  expectIdentical(straight, run(spec, s, {1, 17, 33, 60, 89}), spec + " resumed at steps 1, 17, 33, 60, 89");
+  expectIdentical(straight, run(spec, s, {45}, true), spec + " resumed mid-step and at 45");
+}
+
+INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
+                         ::testing::Values("ekf", "eif", "seif", "seif:sparsify=eseif,beta=4",
+                                           "seif:relax-order=random", "ekf:linearization=fej",
+                                           "eif:linearization=fej", "seif:linearization=fej",
+                                           "seif:deactivate=oldest,active=4", "seif:mean=exact",
+                                           "seif:recovery=after-update,covariance=local"));
+
+TEST(Checkpoint, RandomOrderDependsOnTheSavedEngine) {
+  // The resume test can fail: the same checkpoint with the random engine restarted from
+  // its seed (everything else kept) ends elsewhere.
+  const Scenario s = scenarioWithOutliers(11, 40, 60);
+  const std::string spec = "seif:relax-order=random";
+  const Outcome straight = run(spec, s, {});
+  auto resumeFrom = [&](bool restart_engine) {
+    std::unique_ptr<SlamFilter> f = makeFilter(spec, s.start, test::configFor(s));
+    for (std::size_t k = 0; k < s.steps.size(); ++k) {
+      f->step(s.steps[k].u, s.steps[k].observations);
+      if (k + 1 != 30) continue;
+      std::string bytes = saveToBytes(*f);
+      if (restart_engine) {
+        // The engine's text follows the first-estimates section (flag 0): tag, length, text.
+        const std::string marker = std::string("first-estimates", 15);
+        const std::size_t at = bytes.find(marker) + marker.size() + 9;
+        std::uint64_t len = 0;
+        for (int i = 7; i >= 0; --i) len = (len << 8) | static_cast<unsigned char>(bytes[at + 1 + static_cast<std::size_t>(i)]);
+        std::ostringstream fresh;
+        fresh << std::mt19937_64(1);
+        std::string field(9, '\0');
+        field[0] = bytes[at];
+        for (int i = 0; i < 8; ++i) field[static_cast<std::size_t>(1 + i)] = static_cast<char>((fresh.str().size() >> (8 * i)) & 0xFF);
+        bytes = resealed(bytes.substr(0, at) + field + fresh.str() + bytes.substr(at + 9 + len));
+      }
+      f = loadFromBytes(bytes, "memory");
+    }
+    return outcome(*f);
+  };
+  EXPECT_TRUE(sameBits(straight.mean, resumeFrom(false).mean));
+  EXPECT_FALSE(sameBits(straight.mean, resumeFrom(true).mean));
+}
+
+TEST(Checkpoint, FilesExtrasAndModels) {
+  const fs::path dir = fs::temp_directory_path() / ("seif-checkpoint-test-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  FilterConfig config;
+  AckermannGeometry g;
+  g.tracked_point = Vec2(0.3, -0.1);
+  config.motion = std::make_shared<AckermannModel>(g, 0.05, 0.01, NoiseForm::Rate);
+  Mat2 noise;
+  noise << 0.04, 0.01, 0.01, 0.09;
+  config.sensor = std::make_shared<CartesianModel>(noise, Pose2(0.1, 0.2, 0.3));
+  config.outlier_gate = 50.0;
+  config.initial_pose_sigma = Vec3(0.1, 0.2, 0.03);
+  for (const char* spec : {"ekf", "eif", "seif:active=3,relax=4,seed=9,sparsify=eseif,beta=3"}) {
+    const std::unique_ptr<SlamFilter> f = makeFilter(spec, Pose2(1, 2, 0.5), config);
+    const fs::path file = dir / (std::string(spec).substr(0, 4) + ".ckpt");
+    f->save(file, CheckpointExtras{7, {{"dataset", "victoria"}, {"", ""}}});
+    CheckpointExtras extras;
+    const std::unique_ptr<SlamFilter> g2 = load(file, &extras);
+    EXPECT_EQ(extras.steps_consumed, 7u);
+    EXPECT_EQ(extras.values.at("dataset"), "victoria");
+    EXPECT_EQ(g2->name(), f->name());
+    EXPECT_EQ(g2->motionModel().describe(), f->motionModel().describe());
+    EXPECT_EQ(g2->sensorModel().describe(), f->sensorModel().describe());
+    EXPECT_TRUE(sameBits(g2->sensorModel().noise(), noise));
+    EXPECT_TRUE(sameBits(g2->mean(), f->mean()));
+    EXPECT_TRUE(sameBits(g2->poseCovariance(), f->poseCovariance()));
+    EXPECT_TRUE(saveToBytes(*g2, extras) == saveToBytes(*f, extras));
+    if (const auto* seif = dynamic_cast<const SeifSlam*>(g2.get())) {
+      EXPECT_EQ(seif->options().max_active, 3);
+      EXPECT_EQ(seif->options().seed, 9u);
+      EXPECT_EQ(seif->options().eseif_beta, 3);
+      EXPECT_EQ(seif->options().sparsify, SeifOptions::Sparsify::Eseif);
+    }
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Checkpoint, BatchCannotBeSaved) {
+  const Scenario s = test::makeScenario(3, 5, 3);
+  const std::unique_ptr<SlamFilter> f = makeFilter("batch", s.start, test::configFor(s));
+  try {
+    (void)saveToBytes(*f);
+    FAIL() << "saving the batch MAP should throw";
+  } catch (const seif::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("batch"), std::string::npos) << e.what();
+  }
+}
+
+// ---------------------------------------------------------------- damaged files --------
+
+std::string checkpointOf(const std::string& spec, int landmarks, int steps) {
+  const Scenario s = scenarioWithOutliers(5, landmarks, steps);
+  std::unique_ptr<SlamFilter> f = makeFilter(spec, s.start, test::configFor(s));
+  for (const Step& step : s.steps) f->step(step.u, step.observations);
+  return saveToBytes(*f, CheckpointExtras{static_cast<std::uint64_t>(steps), {{"k", "v"}}});
+}
+
+/// Loading `bytes` throws a DataError naming `name`; returns its message.
+std::string expectDataError(const std::string& bytes, const std::string& name = "damaged.ckpt") {
+  try {
+    (void)loadFromBytes(bytes, name);
+  } catch (const DataError& e) {
+    EXPECT_EQ(e.file(), name);
+    EXPECT_EQ(std::string(e.what()).rfind(name + ": ", 0), 0u) << e.what();
+    return e.what();
+  }
+  ADD_FAILURE() << "loaded a damaged checkpoint";
+  return {};
+}
+
+TEST(CheckpointDamage, TruncatedAtEveryOffset) {
+  for (const char* spec : {"ekf", "seif:sparsify=eseif"}) {
+    const std::string bytes = checkpointOf(spec, 12, 20);
+    ASSERT_NO_THROW((void)loadFromBytes(bytes, "whole"));
+    for (std::size_t n = 0; n < bytes.size(); ++n) expectDataError(bytes.substr(0, n));
+    // Truncated and resealed: the payload parser itself meets the end.
+    for (std::size_t n = 32; n < bytes.size(); n += 3) expectDataError(resealed(bytes.substr(0, n)));
+  }
+}
+
+TEST(CheckpointDamage, FlippedBytes) {
+  const std::string bytes = checkpointOf("seif", 12, 20);
+  for (std::size_t i = 0; i < bytes.size(); i += (i < 64 ? 1 : 5)) {
+    std::string damaged = bytes;
+    damaged[i] = static_cast<char>(damaged[i] ^ 0x5A);
+    expectDataError(damaged);
+  }
+  std::string damaged = bytes;
+  damaged[100] = static_cast<char>(damaged[100] ^ 1);
+  EXPECT_NE(expectDataError(damaged).find("checksum"), std::string::npos);
+}
+
+TEST(CheckpointDamage, ForgedChecksumNeverCrashes) {
+  // A corrupted payload with a valid checksum: either a DataError, or a consistent filter
+  // that can take more steps (a flipped double is still a double).
+  const Scenario s = test::makeScenario(5, 12, 3);
+  for (const char* spec : {"ekf", "eif", "seif:sparsify=eseif,linearization=fej"}) {
+    const std::string bytes = checkpointOf(spec, 12, 20);
+    for (std::size_t i = 32; i < bytes.size(); i += 3) {
+      for (const unsigned char x : {0x01, 0x80, 0xFF}) {
+        std::string damaged = bytes;
+        damaged[i] = static_cast<char>(damaged[i] ^ x);
+        std::unique_ptr<SlamFilter> f;
+        try {
+          f = loadFromBytes(resealed(damaged), "forged.ckpt");
+        } catch (const DataError& e) {
+          EXPECT_EQ(e.file(), "forged.ckpt");
+          continue;
+        }
+        try {
+          for (const Step& step : s.steps) f->step(step.u, step.observations);
+          (void)f->mean();
+          (void)f->stats();
+        } catch (const std::exception&) {
+          // a numerical failure of nonsense numbers is fine; a crash is not
+        }
+      }
+    }
+  }
+}
+
+TEST(CheckpointDamage, ForeignFiles) {
+  const std::string bytes = checkpointOf("ekf", 6, 5);
+  EXPECT_NE(expectDataError("").find("empty"), std::string::npos);
+  EXPECT_NE(expectDataError("SEIF").find("magic"), std::string::npos);
+  EXPECT_NE(expectDataError("x y z\n1 2 3\n").find("magic"), std::string::npos);
+  std::string magic = bytes;
+  magic[0] = 'X';
+  EXPECT_NE(expectDataError(magic).find("magic"), std::string::npos);
+  std::string future = bytes;
+  future[8] = 2;
+  EXPECT_NE(expectDataError(future).find("version 2"), std::string::npos);
+  std::string zero = bytes;
+  zero[8] = 0;
+  EXPECT_NE(expectDataError(zero).find("version 0"), std::string::npos);
+  EXPECT_NE(expectDataError(bytes.substr(0, 20)).find("truncated header"), std::string::npos);
+  EXPECT_NE(expectDataError(bytes + "x").find("trailing"), std::string::npos);
+
+  const fs::path dir = fs::temp_directory_path() / ("seif-checkpoint-foreign-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path text = dir / "notes.txt";
+  std::ofstream(text) << "not a checkpoint\n";
+  try {
+    (void)load(text);
+    ADD_FAILURE() << "loaded a text file";
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find(text.string()), std::string::npos) << e.what();
+  }
+  std::ofstream(dir / "empty.ckpt").close();
+  EXPECT_THROW((void)load(dir / "empty.ckpt"), DataError);
+  EXPECT_THROW((void)load(dir / "missing.ckpt"), DataError);
+  EXPECT_THROW((void)load(dir), DataError);
+  fs::remove_all(dir);
+}
+
+TEST(CheckpointDamage, HugeLengthsAreRefusedBeforeAllocation) {
+  // A forged file whose landmark count promises 2^60 ids.
+  const std::string bytes = checkpointOf("ekf", 6, 5);
+  const std::string marker = std::string("\x06\x0e\0\0\0\0\0\0\0landmark-index", 23);
+  const std::size_t at = bytes.find(marker);
+  ASSERT_NE(at, std::string::npos);
+  std::string damaged = bytes;
+  const std::size_t count = at + marker.size() + 1;  // after the u64 tag
+  damaged[count + 7] = 0x10;
+  EXPECT_NE(expectDataError(resealed(damaged)).find("exceeds"), std::string::npos);
+}
+
+// ---------------------------------------------------------------- fuzz corpus ----------
+
+#ifdef SEIF_SOURCE_DIR
+TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
+  const fs::path root = fs::path(SEIF_SOURCE_DIR) / "fuzz";
+  // SEIF_WRITE_CHECKPOINT_CORPUS=1 rewrites the seeds (after a format change).
+  if (std::getenv("SEIF_WRITE_CHECKPOINT_CORPUS")) {
+    const Scenario s = test::makeScenario(3, 8, 12);
+    for (const auto& [file, spec] : {std::pair{"ekf.ckpt", "ekf:linearization=fej"}, std::pair{"eif.ckpt", "eif"},
+                                     std::pair{"seif.ckpt", "seif:active=3,relax-order=random"},
+                                     std::pair{"eseif.ckpt", "seif:sparsify=eseif,active=3"}}) {
+      std::unique_ptr<SlamFilter> f = makeFilter(spec, s.start, test::configFor(s));
+      for (const Step& step : s.steps) f->step(step.u, step.observations);
+      f->save(root / "corpus" / "fuzz_checkpoint" / file, CheckpointExtras{12, {{"spec", spec}}});
+    }
+  }
+  int seeds = 0;
+  for (const auto& entry : fs::directory_iterator(root / "corpus" / "fuzz_checkpoint")) {
+    EXPECT_NO_THROW((void)load(entry.path())) << entry.path();
+    ++seeds;
+  }
+  EXPECT_GE(seeds, 3);
+  for (const auto& entry : fs::directory_iterator(root / "regressions" / "fuzz_checkpoint")) {
+    EXPECT_THROW((void)load(entry.path()), DataError) << entry.path();
+  }
+}
+#endif
+
+}  // namespace
+}  // namespace seif
