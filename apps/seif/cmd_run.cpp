@@ -1,4 +1,5 @@
 // seif run: one filter over one dataset of any format (flags -> RunRequest -> runDataset).
+#include <seif/core/errors.hpp>
 #include "commands.hpp"
 #include "options.hpp"
 
@@ -21,6 +22,9 @@ struct RunArgs {
   double outlier_gate = FilterConfig{}.outlier_gate;
   std::string map_covariance = "exact";
   std::string trajectory_covariance = "off";
+  std::size_t checkpoint_every = 0;
+  std::string checkpoint;
+  std::string resume;
   std::string command_line;
 };
 
@@ -43,6 +47,15 @@ void run(const RunArgs& args) {
   request.seif = args.seif.resolve();
   request.map_covariances = args.map_covariance == "exact";
   request.trajectory_covariances = args.trajectory_covariance == "on";
+  request.checkpoint_every = args.checkpoint_every;
+  request.checkpoint = args.checkpoint;
+  request.resume = args.resume;
+  if (request.checkpoint_every > 0 && request.checkpoint.empty()) {
+    throw InvalidArgument("--checkpoint-every needs --checkpoint FILE");
+  }
+  if (!request.checkpoint.empty() && request.checkpoint_every == 0) {
+    throw InvalidArgument("--checkpoint FILE needs --checkpoint-every N");
+  }
   request.command_line = args.command_line;
   RunReport r;
   {
@@ -50,7 +63,8 @@ void run(const RunArgs& args) {
     r = runDataset(request, args.out, [&](double f) { progress(f); });
   }
   const RunOutput& out = r.output;
-  std::printf("%s on %s (%s): %zu steps, %zu landmarks, %.1f us/step\n", args.filter.c_str(),
+  if (!args.resume.empty()) std::printf("resumed from %s\n", args.resume.c_str());
+  std::printf("%s on %s (%s): %zu steps, %zu landmarks, %.1f us/step\n", r.filter.c_str(),
               args.dataset.c_str(), r.info.format.c_str(), out.steps, r.landmarks,
               out.steps == 0 ? 0.0 : 1e6 * out.seconds / static_cast<double>(out.steps));
   std::printf("  motion: %s\n  sensor: %s\n", r.info.motion->describe().c_str(), r.info.sensor->describe().c_str());
@@ -139,6 +153,16 @@ void addRunCommand(CLI::App& app) {
                   "smoother's marginals, 3 solves per pose); off: no file")
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
+  cmd->add_option("--checkpoint-every", args->checkpoint_every,
+                  "save the filter and the run so far to --checkpoint after every N steps (0: never)")
+      ->transform(integerIn(0, 1000000000))
+      ->capture_default_str();
+  cmd->add_option("--checkpoint", args->checkpoint,
+                  "the checkpoint file (binary, versioned; replaced atomically each time; docs/checkpoints.md)");
+  cmd->add_option("--resume", args->resume,
+                  "resume the run saved in this checkpoint (same --dataset): the filter is the\n"
+                  "checkpoint's, the steps it consumed are skipped, and the outputs equal those of\n"
+                  "the uninterrupted run");
   args->noise.add(*cmd);
   args->seif.add(*cmd);
   cmd->callback([args] {

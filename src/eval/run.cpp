@@ -1,6 +1,8 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_loop.hpp>
+
+#include "run_checkpoint.hpp"
 #include <seif/models/odometry_model.hpp>
 
 #include <cmath>
@@ -22,8 +24,11 @@ namespace {
 /// smoothed trajectory and the filter's final statistics.
 class OutputRecorder : public RunObserver {
  public:
-  explicit OutputRecorder(RunOutput& out) : out_(out) {}
-  void onStart(const SlamFilter& filter, double time) override { out_.trajectory.push_back({time, filter.pose()}); }
+  /// `resumed`: `out` already holds the run up to the start (a checkpoint's).
+  explicit OutputRecorder(RunOutput& out, bool resumed = false) : out_(out), resumed_(resumed) {}
+  void onStart(const SlamFilter& filter, double time) override {
+    if (!resumed_) out_.trajectory.push_back({time, filter.pose()});
+  }
   void afterUpdate(const SlamFilter& filter, const Step& step, std::size_t k, double seconds) override {
     out_.step_seconds.push_back(seconds);
     out_.seconds += seconds;
@@ -59,19 +64,23 @@ class OutputRecorder : public RunObserver {
 
  private:
   RunOutput& out_;
+  bool resumed_;
 };
 
 /// The filter's pose covariance at the start and after every step.
 class PoseCovarianceRecorder : public RunObserver {
  public:
-  explicit PoseCovarianceRecorder(std::vector<Mat3>& covariances) : covariances_(covariances) {}
-  void onStart(const SlamFilter& filter, double) override { covariances_.push_back(filter.poseCovariance()); }
+  PoseCovarianceRecorder(std::vector<Mat3>& covariances, bool resumed) : covariances_(covariances), resumed_(resumed) {}
+  void onStart(const SlamFilter& filter, double) override {
+    if (!resumed_) covariances_.push_back(filter.poseCovariance());
+  }
   void afterUpdate(const SlamFilter& filter, const Step&, std::size_t, double) override {
     covariances_.push_back(filter.poseCovariance());
   }
 
  private:
   std::vector<Mat3>& covariances_;
+  bool resumed_;
 };
 
 /// The controls integrated alone from the filter's start pose, at the steps' stamps.
@@ -79,6 +88,10 @@ class DeadReckoningRecorder : public RunObserver {
  public:
   DeadReckoningRecorder(const MotionModel& motion, std::vector<TimedPose>& track) : motion_(motion), track_(track) {}
   void onStart(const SlamFilter& filter, double time) override {
+    if (!track_.empty()) {  // resumed: the track so far is the checkpoint's
+      pose_ = track_.back().pose;
+      return;
+    }
     pose_ = filter.pose();
     track_.push_back({time, pose_});
   }
@@ -125,18 +138,23 @@ RunOutput runFilter(SlamFilter& filter, const Dataset& data,
 }
 
 RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function<void(double)>& progress,
-                    bool pose_covariances) {
+                    bool pose_covariances, const RunCheckpointing& checkpointing, const RunResume* resume) {
   RunOutput out;
+  if (resume) out = resume->output;
   StepAssembler steps;
-  OutputRecorder recorder(out);
-  PoseCovarianceRecorder covariances(out.pose_covariances);
+  OutputRecorder recorder(out, resume != nullptr);
+  PoseCovarianceRecorder covariances(out.pose_covariances, resume != nullptr);
   DeadReckoningRecorder dead_reckoning(*source.info().motion, out.dead_reckoning);
   ProgressReporter reporter(1024, SIZE_MAX, [&](std::size_t) { progress(source.progress()); });
   std::vector<RunObserver*> observers = {&recorder};
   if (pose_covariances) observers.push_back(&covariances);
   observers.push_back(&dead_reckoning);
   if (progress) observers.push_back(&reporter);
-  runLoop(filter, source, steps, observers);
+  CheckpointWriter checkpoints(checkpointing, out);
+  if (checkpointing.every > 0) observers.push_back(&checkpoints);
+  RunLoopOptions options;
+  if (resume) options.start_step = resume->steps;
+  runLoop(filter, source, steps, observers, options);
   if (progress) progress(1.0);
   out.dropped = source.dropped();
   if (steps.droppedBeforeFirstControl() > 0) out.dropped["before_first_control"] += steps.droppedBeforeFirstControl();

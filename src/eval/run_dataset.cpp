@@ -2,6 +2,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/core/version.hpp>
 #include <seif/eval/run_dataset.hpp>
+#include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/io/atomic_file.hpp>
 #include <seif/io/results.hpp>
@@ -38,7 +39,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"command_line", request.command_line},
       {"dataset", request.dataset.string()},
       {"format", r.info.format},
-      {"filter", request.filter},
+      {"filter", r.filter},
       {"motion_model", r.info.motion->describe()},
       {"sensor_model", r.info.sensor->describe()},
       {"noise", noise},
@@ -75,7 +76,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"dropped", dropped},
   };
   if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
-  if (request.filter == "seif") j["seif"] = toJson(request.seif);
+  if (r.filter == "seif") j["seif"] = toJson(request.seif);
   return j.dump(2) + "\n";
 }
 
@@ -127,8 +128,29 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   config.motion = source->info().motion;
   config.sensor = source->info().sensor;
   config.outlier_gate = request.outlier_gate;
-  auto filter = makeFilter(request.filter, source->info().start_pose, config, request.seif);
-  report.output = runFilter(*filter, *source, progress, request.trajectory_covariances);
+  RunCheckpointing checkpointing;
+  checkpointing.every = request.checkpoint_every;
+  checkpointing.path = request.checkpoint;
+  checkpointing.values = {{"dataset", std::filesystem::absolute(request.dataset).lexically_normal().string()},
+                          {"filter", request.filter}};
+  std::unique_ptr<SlamFilter> filter;
+  std::optional<RunResume> resume;
+  if (!request.resume.empty()) {
+    CheckpointExtras extras;
+    filter = load(request.resume, &extras);
+    const std::string name = request.resume.string();
+    if (extras.values["dataset"] != checkpointing.values["dataset"]) {
+      throw DataError(name, 0, "the checkpoint is of the run of " + extras.values["dataset"] + ", not of " +
+                                   checkpointing.values["dataset"]);
+    }
+    checkpointing.values["filter"] = extras.values["filter"];
+    resume = runResumeFrom(extras.values, static_cast<std::size_t>(extras.steps_consumed), name);
+  } else {
+    filter = makeFilter(request.filter, source->info().start_pose, config, request.seif);
+  }
+  report.output = runFilter(*filter, *source, progress, request.trajectory_covariances, checkpointing,
+                            resume ? &*resume : nullptr);
+  report.filter = checkpointing.values["filter"];
   report.info = source->info();
   source.reset();
   if (report.output.steps == 0) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");

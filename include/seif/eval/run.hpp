@@ -10,6 +10,7 @@
 #include <seif/eval/step_assembler.hpp>
 
 #include <cstddef>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <string>
@@ -39,11 +40,36 @@ struct RunOutput {
   std::map<std::string, std::size_t> dropped;  ///< by the source and the assembler, by reason
 };
 
+/// Checkpoints of a streamed run (`seif run --checkpoint-every N --checkpoint FILE`): after
+/// every `every` steps the filter and the run so far are saved to `path` (atomically, the
+/// previous one replaced), with `values` recorded beside them (the dataset, the spec).
+struct RunCheckpointing {
+  std::size_t every = 0;  ///< 0: never
+  std::filesystem::path path;
+  std::map<std::string, std::string> values;
+};
+
+/// A run resumed from a checkpoint (`seif run --resume FILE`): the steps it had consumed
+/// and its outputs so far; the filter comes from the same checkpoint (seif::load).
+struct RunResume {
+  std::size_t steps = 0;
+  RunOutput output;
+};
+
+/// The run state a checkpoint carries (RunCheckpointing), from the extras load() returns.
+/// Throws DataError naming `checkpoint` when they hold no run or a damaged one.
+RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::size_t steps,
+                        const std::string& checkpoint);
+
 /// Streams `source` through `filter`, whose config must hold the source's models (the
 /// filter is built from info()). `progress(fraction)` is called now and then.
 /// A failure inside a step is rethrown as NumericError naming the step and its time.
+/// With `resume`, the first resume->steps steps of the source are skipped (the filter is
+/// the checkpoint's) and the outputs continue resume->output: a resumed run ends with the
+/// same outputs, bit for bit, as the run that was never interrupted (timings aside).
 RunOutput runFilter(SlamFilter& filter, EventSource& source,
-                    const std::function<void(double)>& progress = {}, bool pose_covariances = false);
+                    const std::function<void(double)>& progress = {}, bool pose_covariances = false,
+                    const RunCheckpointing& checkpointing = {}, const RunResume* resume = nullptr);
 
 /// The pose the filter starts from: the ground truth at the first step's time when the
 /// dataset has ground truth, else the origin.

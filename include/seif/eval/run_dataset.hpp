@@ -32,6 +32,14 @@ struct RunRequest {
   /// trajectory_cov.csv: the pose covariance after every step (SEIF: one factorisation per
   /// step with covariance=exact; O(1) with covariance=local).
   bool trajectory_covariances = false;
+  /// Save the filter and the run so far to `checkpoint` after every `checkpoint_every`
+  /// steps (0: never), replacing the previous checkpoint atomically.
+  std::size_t checkpoint_every = 0;
+  std::filesystem::path checkpoint;
+  /// Resume the run saved in this checkpoint (of the same dataset): the filter is the
+  /// checkpoint's (`filter` and `seif` are not used), the steps it consumed are skipped, and
+  /// the outputs equal those of the run that was never interrupted.
+  std::filesystem::path resume;
   std::string command_line;     ///< recorded in metrics.json
 };
 
@@ -44,6 +52,7 @@ struct RunErrors {
 };
 
 struct RunReport {
+  std::string filter;  ///< the spec that ran (a resumed run's: the checkpoint's)
   DatasetInfo info;
   RunOutput output;
   RunErrors errors;

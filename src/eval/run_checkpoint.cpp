@@ -1,0 +1,94 @@
+#include "run_checkpoint.hpp"
+
+#include "../core/binary_archive.hpp"
+
+#include <seif/core/errors.hpp>
+#include <seif/filters/checkpoint.hpp>
+
+namespace seif {
+
+namespace {
+
+void writeTrack(ArchiveWriter& w, const std::vector<TimedPose>& track) {
+  w.count(track.size());
+  for (const TimedPose& p : track) {
+    w.f64(p.time);
+    w.fixed(p.pose);
+  }
+}
+
+std::vector<TimedPose> readTrack(ArchiveReader& r, const char* what) {
+  std::vector<TimedPose> track(r.count(what, 4 * 9));
+  for (TimedPose& p : track) {
+    p.time = r.f64("time");
+    r.fixed("pose", p.pose, true);
+  }
+  return track;
+}
+
+}  // namespace
+
+void CheckpointWriter::afterUpdate(const SlamFilter& filter, const Step&, std::size_t k, double) {
+  if ((k + 1) % policy_.every != 0) return;
+  CheckpointExtras extras;
+  extras.steps_consumed = k + 1;
+  extras.values = policy_.values;
+  extras.values[std::string(kRunOutputKey)] = encodeRunOutput(out_);
+  saveCheckpoint(filter, policy_.path, extras);
+}
+
+std::string encodeRunOutput(const RunOutput& out) {
+  ArchiveWriter w;
+  w.section("run-output");
+  w.u64(out.steps);
+  writeTrack(w, out.trajectory);
+  writeTrack(w, out.dead_reckoning);
+  w.count(out.step_seconds.size());
+  for (double s : out.step_seconds) w.f64(s);
+  w.count(out.pose_covariances.size());
+  for (const Mat3& P : out.pose_covariances) w.fixed(P);
+  w.f64(out.seconds);
+  w.u64(out.max_robot_links);
+  w.u64(out.max_blocks_touched);
+  return w.bytes();
+}
+
+RunOutput decodeRunOutput(std::string_view bytes, const std::string& name) {
+  ArchiveReader r(bytes, name);
+  r.section("run-output");
+  RunOutput out;
+  out.steps = static_cast<std::size_t>(r.u64("steps"));
+  out.trajectory = readTrack(r, "trajectory poses");
+  out.dead_reckoning = readTrack(r, "dead-reckoning poses");
+  out.step_seconds.resize(r.count("step times", 9));
+  for (double& s : out.step_seconds) s = r.f64("step time");
+  out.pose_covariances.resize(r.count("pose covariances", 9 * 9));
+  for (Mat3& P : out.pose_covariances) r.fixed("pose covariance", P, true);
+  out.seconds = r.f64("seconds");
+  out.max_robot_links = static_cast<std::size_t>(r.u64("most robot links"));
+  out.max_blocks_touched = static_cast<std::size_t>(r.u64("most blocks touched"));
+  r.finish();
+  if (out.trajectory.size() != out.steps + 1 || out.dead_reckoning.size() != out.steps + 1 ||
+      out.step_seconds.size() != out.steps) {
+    r.fail("the run's outputs do not match its " + std::to_string(out.steps) + " steps");
+  }
+  return out;
+}
+
+RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::size_t steps,
+                        const std::string& checkpoint) {
+  const auto it = values.find(std::string(kRunOutputKey));
+  if (it == values.end()) {
+    throw DataError(checkpoint, 0, "the checkpoint holds a filter but no run to resume (not written by seif run)");
+  }
+  RunResume resume;
+  resume.steps = steps;
+  resume.output = decodeRunOutput(it->second, checkpoint);
+  if (resume.output.steps != steps) {
+    throw DataError(checkpoint, 0, "the run's outputs hold " + std::to_string(resume.output.steps) + " steps, the filter " +
+                                       std::to_string(steps));
+  }
+  return resume;
+}
+
+}  // namespace seif

@@ -1,0 +1,31 @@
+#pragma once
+// Checkpoints of a streamed run (eval/run.hpp RunCheckpointing, RunResume): the observer
+// that saves them, and the run's outputs so far in the checkpoint's extras.
+#include <seif/eval/run.hpp>
+#include <seif/eval/run_loop.hpp>
+
+#include <string>
+#include <string_view>
+
+namespace seif {
+
+/// Saves the filter and `out` (kept up to date by the observers before it) after every
+/// `every`-th step, as a checkpoint whose extras say how many steps were consumed.
+class CheckpointWriter : public RunObserver {
+ public:
+  CheckpointWriter(const RunCheckpointing& policy, const RunOutput& out) : policy_(policy), out_(out) {}
+  void afterUpdate(const SlamFilter& filter, const Step& step, std::size_t k, double seconds) override;
+
+ private:
+  const RunCheckpointing& policy_;
+  const RunOutput& out_;
+};
+
+/// The extras key under which a checkpoint carries the run's outputs so far.
+inline constexpr std::string_view kRunOutputKey = "run-output";
+
+std::string encodeRunOutput(const RunOutput& out);
+/// Throws DataError naming `name` for bytes encodeRunOutput() did not write.
+RunOutput decodeRunOutput(std::string_view bytes, const std::string& name);
+
+}  // namespace seif
