@@ -25,6 +25,25 @@ import numpy as _np
 
 __version__ = _core.__version__
 
+
+def _filter_from_bytes(data, name):
+    """Unpickling: the filter in checkpoint bytes (a Python function, so pickle can name it)."""
+    return _core.load_bytes(data, name)
+
+
+def _reduce_filter(self):
+    """Pickling: a filter travels as its checkpoint (``checkpoint_bytes``), bit-exactly."""
+    return (_filter_from_bytes, (_core.checkpoint_bytes(self), "pickle of a " + self.name + " filter"))
+
+
+def _save_filter(self, path, steps_consumed=0, values=None):
+    """Saves the filter's whole state to the checkpoint ``path``; ``seif.load(path)`` reads it."""
+    _core.save_checkpoint(self, str(path), steps_consumed, values or {})
+
+
+_core.SlamFilter.__reduce__ = _reduce_filter
+_core.SlamFilter.save = _save_filter
+
 __all__ = [name for name in dir(_core) if not name.startswith("_")] + [
     "simulated_dataset",
     "observations",

@@ -23,6 +23,7 @@ void bindCore(py::module_& m);        // core.cpp: types, models, dataset vocabu
 void bindFilters(py::module_& m);     // filters.cpp
 void bindIo(py::module_& m);          // io.cpp: readers, simulator, result files
 void bindEval(py::module_& m);        // eval.cpp: run loop, metrics, experiments
+void bindCheckpoints(py::module_& m); // checkpoint.cpp: save, load, pickling
 
 /// A C++ enum bound as a Python enum that is also constructible from, and implicitly
 /// converted from, the library's lower-case name ("per-step", "fej", ...): every argument

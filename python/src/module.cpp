@@ -29,4 +29,5 @@ PYBIND11_MODULE(_core, m) {
   sp::bindFilters(m);
   sp::bindIo(m);
   sp::bindEval(m);
+  sp::bindCheckpoints(m);
 }
