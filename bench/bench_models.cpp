@@ -1,6 +1,6 @@
 // Cost of the model evaluations that every filter step makes.
 #include <seif/models/range_bearing.hpp>
-#include <seif/models/velocity_motion.hpp>
+#include "models/velocity_motion.hpp"
 
 #include <benchmark/benchmark.h>
 

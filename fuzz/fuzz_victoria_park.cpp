@@ -2,7 +2,7 @@
 // tree_observations_associated_UTS.txt, then gps.txt, separated by lines "%%".
 #include "fuzz_events.hpp"
 
-#include <seif/io/victoria_park.hpp>
+#include "io/victoria_park.hpp"
 
 #include <Eigen/LU>
 #include <cstdint>

@@ -5,7 +5,7 @@
 #include <seif/core/dataset.hpp>
 #include <seif/filters/slam_filter.hpp>
 #include <seif/models/range_bearing.hpp>
-#include <seif/models/velocity_motion.hpp>
+#include "models/velocity_motion.hpp"
 
 #include <random>
 #include <vector>

@@ -2,9 +2,9 @@
 // definite, nothing becomes NaN, the estimate keeps tracking the robot, and the filter's
 // memory stays flat once the map is built.
 #include <seif/core/angles.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "filters/seif_slam.hpp"
 #include <seif/models/range_bearing.hpp>
-#include <seif/models/velocity_motion.hpp>
+#include "models/velocity_motion.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>

@@ -4,9 +4,9 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
-#include <seif/filters/batch_map.hpp>
-#include <seif/filters/eif_slam.hpp>
-#include <seif/filters/ekf_slam.hpp>
+#include "filters/batch_map.hpp"
+#include "filters/eif_slam.hpp"
+#include "filters/ekf_slam.hpp"
 #include <seif/filters/factory.hpp>
 #include <seif/models/range_bearing.hpp>
 #include <seif/sim/world.hpp>

@@ -7,7 +7,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "filters/seif_slam.hpp"
 #include <seif/models/ackermann_model.hpp>
 #include <seif/models/cartesian.hpp>
 

@@ -7,7 +7,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/consistency.hpp>
 #include <seif/eval/stats.hpp>
-#include <seif/filters/ekf_slam.hpp>
+#include "filters/ekf_slam.hpp"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>

@@ -3,7 +3,7 @@
 // conditions on everything outside the blanket, so it can only be smaller.
 #include "scenario.hpp"
 
-#include <seif/filters/seif_slam.hpp>
+#include "filters/seif_slam.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>

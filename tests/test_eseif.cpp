@@ -5,10 +5,10 @@
 #include "scenario.hpp"
 
 #include <seif/core/errors.hpp>
-#include <seif/filters/eif_slam.hpp>
+#include "filters/eif_slam.hpp"
 #include <seif/filters/factory.hpp>
-#include <seif/filters/information_ops.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "filters/information_ops.hpp"
+#include "filters/seif_slam.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

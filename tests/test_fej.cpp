@@ -5,11 +5,11 @@
 
 #include <seif/eval/run.hpp>
 #include <seif/eval/stats.hpp>
-#include <seif/filters/eif_slam.hpp>
-#include <seif/filters/ekf_slam.hpp>
+#include "filters/eif_slam.hpp"
+#include "filters/ekf_slam.hpp"
 #include <seif/filters/factory.hpp>
-#include <seif/filters/first_estimates.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "filters/first_estimates.hpp"
+#include "filters/seif_slam.hpp"
 #include <seif/sim/world.hpp>
 
 #include <gtest/gtest.h>

@@ -3,8 +3,8 @@
 #include "scenario.hpp"
 
 #include <seif/core/errors.hpp>
-#include <seif/filters/eif_slam.hpp>
-#include <seif/filters/ekf_slam.hpp>
+#include "filters/eif_slam.hpp"
+#include "filters/ekf_slam.hpp"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>

@@ -2,8 +2,8 @@
 // rows, same grouping, same drops), with its noise and start pose said and sourced.
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
-#include <seif/io/mrclam_source.hpp>
-#include <seif/io/robot_log_source.hpp>
+#include "io/mrclam_source.hpp"
+#include "io/robot_log_source.hpp"
 #include <seif/sim/world.hpp>
 
 #include <gtest/gtest.h>

@@ -4,7 +4,7 @@
 
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
-#include <seif/io/victoria_park.hpp>
+#include "io/victoria_park.hpp"
 
 #include <gtest/gtest.h>
 

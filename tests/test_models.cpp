@@ -3,7 +3,7 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
 #include <seif/models/range_bearing.hpp>
-#include <seif/models/velocity_motion.hpp>
+#include "models/velocity_motion.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>

@@ -3,8 +3,8 @@
 // mount, and EKF = EIF with each model.
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
-#include <seif/filters/eif_slam.hpp>
-#include <seif/filters/ekf_slam.hpp>
+#include "filters/eif_slam.hpp"
+#include "filters/ekf_slam.hpp"
 #include <seif/models/ackermann_model.hpp>
 #include <seif/models/cartesian.hpp>
 #include <seif/models/odometry_model.hpp>

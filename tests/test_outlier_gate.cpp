@@ -5,7 +5,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
 #include <seif/filters/factory.hpp>
-#include <seif/filters/outlier_gate.hpp>
+#include "filters/outlier_gate.hpp"
 #include <seif/models/range_bearing.hpp>
 #include <seif/sim/world.hpp>
 

@@ -3,11 +3,11 @@
 // hook sees the predicted filter and decides what the update gets; and the experiments'
 // thread pool (eval/parallel.hpp).
 #include <seif/core/errors.hpp>
-#include <seif/eval/parallel.hpp>
+#include "eval/parallel.hpp"
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_loop.hpp>
 #include <seif/filters/factory.hpp>
-#include <seif/io/robot_log_source.hpp>
+#include "io/robot_log_source.hpp"
 #include <seif/sim/world.hpp>
 
 #include <gtest/gtest.h>

@@ -4,7 +4,7 @@
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_dataset.hpp>
 #include <seif/filters/factory.hpp>
-#include <seif/io/robot_log_source.hpp>
+#include "io/robot_log_source.hpp"
 #include <seif/models/odometry_model.hpp>
 #include <seif/models/range_bearing.hpp>
 #include <seif/sim/world.hpp>

@@ -3,10 +3,10 @@
 #include "scenario.hpp"
 
 #include <seif/core/errors.hpp>
-#include <seif/filters/eif_slam.hpp>
-#include <seif/filters/ekf_slam.hpp>
-#include <seif/filters/information_ops.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "filters/eif_slam.hpp"
+#include "filters/ekf_slam.hpp"
+#include "filters/information_ops.hpp"
+#include "filters/seif_slam.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>

@@ -10,7 +10,7 @@
 // malloc and free are still intercepted, so the heap checks stay on.
 #include "scenario.hpp"
 
-#include <seif/filters/seif_slam.hpp>
+#include "filters/seif_slam.hpp"
 
 #include <gtest/gtest.h>
 

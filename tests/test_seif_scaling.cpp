@@ -5,7 +5,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/bench.hpp>
 #include <seif/eval/run.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "filters/seif_slam.hpp"
 #include <seif/sim/world.hpp>
 
 #include <gtest/gtest.h>

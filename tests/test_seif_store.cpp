@@ -1,7 +1,7 @@
 // The SEIF's block-sparse store on its own: links symmetric and counted once, H and b as
 // added, gather/scatter exact, robot links consistent after removal, relaxation converging.
 #include <seif/core/errors.hpp>
-#include <seif/filters/seif_store.hpp>
+#include "filters/seif_store.hpp"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>

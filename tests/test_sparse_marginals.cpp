@@ -1,6 +1,6 @@
 // Selected inversion (Takahashi) against the dense inverse.
 #include <seif/core/errors.hpp>
-#include <seif/core/sparse_marginals.hpp>
+#include "core/sparse_marginals.hpp"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>

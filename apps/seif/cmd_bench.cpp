@@ -5,7 +5,7 @@
 #include "options.hpp"
 
 #include <seif/eval/bench.hpp>
-#include <seif/io/atomic_file.hpp>
+#include "io/atomic_file.hpp"
 
 #include <cstdio>
 #include <filesystem>

@@ -6,8 +6,8 @@
 #include "options.hpp"
 
 #include <seif/eval/paper.hpp>
-#include <seif/eval/parallel.hpp>
-#include <seif/filters/information_ops.hpp>
+#include "eval/parallel.hpp"
+#include "filters/information_ops.hpp"
 
 #include <climits>
 #include <cstdint>

@@ -2,8 +2,8 @@
 
 #include <seif/core/errors.hpp>
 #include <seif/eval/run_dataset.hpp>
-#include <seif/filters/information_ops.hpp>
-#include <seif/io/atomic_file.hpp>
+#include "filters/information_ops.hpp"
+#include "io/atomic_file.hpp"
 
 #include <sys/wait.h>
 #include <unistd.h>

@@ -11,6 +11,8 @@
 //   sim      the paper's world and scalable worlds, as datasets
 //   eval     the run loop with observers, runDataset (`seif run` as one call), the
 //            experiments (paper, consistency, bench) and their metrics
+#include <Eigen/Dense>  // the linear algebra the API speaks (poses, covariances)
+
 #include <seif/core/angles.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/core/errors.hpp>

@@ -12,7 +12,7 @@
 #include <seif/models/odometry_model.hpp>
 #include <seif/models/range_bearing.hpp>
 #include <seif/models/velocity_model.hpp>
-#include <seif/models/velocity_motion.hpp>
+#include "models/velocity_motion.hpp"
 
 namespace seif::python {
 

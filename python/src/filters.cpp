@@ -2,11 +2,11 @@
 // interface, with the SEIF's sparse information matrix as scipy.sparse.csc_matrix.
 #include "bindings.hpp"
 
-#include <seif/filters/batch_map.hpp>
-#include <seif/filters/eif_slam.hpp>
-#include <seif/filters/ekf_slam.hpp>
+#include "filters/batch_map.hpp"
+#include "filters/eif_slam.hpp"
+#include "filters/ekf_slam.hpp"
 #include <seif/filters/factory.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "filters/seif_slam.hpp"
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/SparseCore>

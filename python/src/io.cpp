@@ -5,8 +5,8 @@
 #include <seif/io/event_source.hpp>
 #include <seif/io/mrclam.hpp>
 #include <seif/io/results.hpp>
-#include <seif/io/robot_log_source.hpp>
-#include <seif/io/victoria_park.hpp>
+#include "io/robot_log_source.hpp"
+#include "io/victoria_park.hpp"
 #include <seif/sim/world.hpp>
 
 namespace seif::python {

@@ -1,7 +1,7 @@
 #include "binary_archive.hpp"
 
 #include <seif/core/errors.hpp>
-#include <seif/io/atomic_file.hpp>
+#include "io/atomic_file.hpp"
 
 #include <cstring>
 #include <limits>

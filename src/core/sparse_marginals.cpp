@@ -1,5 +1,5 @@
 #include <seif/core/errors.hpp>
-#include <seif/core/sparse_marginals.hpp>
+#include "core/sparse_marginals.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <algorithm>

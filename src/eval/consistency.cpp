@@ -1,10 +1,10 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
 #include <seif/eval/consistency.hpp>
-#include <seif/eval/parallel.hpp>
+#include "eval/parallel.hpp"
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_loop.hpp>
-#include <seif/io/atomic_file.hpp>
+#include "io/atomic_file.hpp"
 
 #include "json_fields.hpp"
 

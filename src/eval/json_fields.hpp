@@ -1,7 +1,7 @@
 #pragma once
 // The JSON form of the settings and statistics the experiments' outputs repeat
 // (metrics.json, results.json, bench.json): one spelling of each key. Private to the library.
-#include <seif/filters/seif_slam.hpp>
+#include "filters/seif_slam.hpp"
 #include <seif/filters/slam_filter.hpp>
 
 #include <nlohmann/json.hpp>

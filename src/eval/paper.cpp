@@ -1,9 +1,10 @@
+#include "filters/seif_slam.hpp"
 #include <seif/eval/paper.hpp>
 #include <seif/eval/stats.hpp>
 #include <seif/eval/consistency.hpp>
 
 #include <seif/core/errors.hpp>
-#include <seif/filters/ekf_slam.hpp>
+#include "filters/ekf_slam.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // The paper's Monte-Carlo study as one call (runPaper in include/seif/eval/paper.hpp).
 #include <seif/core/errors.hpp>
 #include <seif/eval/paper.hpp>
-#include <seif/eval/parallel.hpp>
+#include "eval/parallel.hpp"
 
 #include <algorithm>
 #include <cstdint>

@@ -1,5 +1,5 @@
 // The experiments' thread pool (include/seif/eval/parallel.hpp).
-#include <seif/eval/parallel.hpp>
+#include "eval/parallel.hpp"
 
 #include <algorithm>
 #include <atomic>

@@ -1,6 +1,6 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
-#include <seif/filters/batch_map.hpp>
+#include "filters/batch_map.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

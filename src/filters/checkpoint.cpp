@@ -7,8 +7,8 @@
 
 #include <seif/core/errors.hpp>
 #include <seif/filters/checkpoint.hpp>
-#include <seif/io/atomic_file.hpp>
-#include <seif/io/text_table.hpp>
+#include "io/atomic_file.hpp"
+#include "io/text_table.hpp"
 
 #include <limits>
 #include <stdexcept>

@@ -8,13 +8,13 @@
 // whose checksum was forged still cannot make a later step read out of bounds.
 #include "../core/binary_archive.hpp"
 
-#include <seif/filters/eif_slam.hpp>
-#include <seif/filters/ekf_slam.hpp>
-#include <seif/filters/first_estimates.hpp>
-#include <seif/filters/landmark_book.hpp>
-#include <seif/filters/outlier_gate.hpp>
-#include <seif/filters/seif_slam.hpp>
-#include <seif/filters/seif_store.hpp>
+#include "filters/eif_slam.hpp"
+#include "filters/ekf_slam.hpp"
+#include "filters/first_estimates.hpp"
+#include "filters/landmark_book.hpp"
+#include "filters/outlier_gate.hpp"
+#include "filters/seif_slam.hpp"
+#include "filters/seif_store.hpp"
 
 #include <optional>
 #include <unordered_map>

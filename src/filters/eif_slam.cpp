@@ -1,7 +1,7 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
-#include <seif/filters/eif_slam.hpp>
-#include <seif/filters/information_ops.hpp>
+#include "filters/eif_slam.hpp"
+#include "filters/information_ops.hpp"
 
 #include <Eigen/LU>
 #include <sstream>

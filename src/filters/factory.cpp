@@ -1,7 +1,8 @@
+#include "filters/seif_slam.hpp"
 #include <seif/core/errors.hpp>
-#include <seif/filters/batch_map.hpp>
-#include <seif/filters/eif_slam.hpp>
-#include <seif/filters/ekf_slam.hpp>
+#include "filters/batch_map.hpp"
+#include "filters/eif_slam.hpp"
+#include "filters/ekf_slam.hpp"
 #include <seif/filters/factory.hpp>
 
 #include <charconv>

@@ -1,4 +1,4 @@
-#include <seif/filters/first_estimates.hpp>
+#include "filters/first_estimates.hpp"
 
 namespace seif {
 

@@ -1,5 +1,5 @@
 #include <seif/core/errors.hpp>
-#include <seif/filters/information_ops.hpp>
+#include "filters/information_ops.hpp"
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Cholesky>

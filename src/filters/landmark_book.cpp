@@ -1,5 +1,5 @@
 #include <seif/core/errors.hpp>
-#include <seif/filters/landmark_book.hpp>
+#include "filters/landmark_book.hpp"
 
 #include <Eigen/LU>
 #include <algorithm>

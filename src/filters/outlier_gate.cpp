@@ -1,5 +1,5 @@
 #include <seif/core/errors.hpp>
-#include <seif/filters/outlier_gate.hpp>
+#include "filters/outlier_gate.hpp"
 
 #include <cmath>
 #include <stdexcept>

@@ -1,7 +1,7 @@
 // The SEIF's mean recovery (algorithm.md §2): amortised block Gauss-Seidel, paper eq. (42),
 // or the exact sparse solve of H mu = b. SeifOptions::mean chooses; SeifSlam::update calls.
-#include <seif/core/sparse_marginals.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "core/sparse_marginals.hpp"
+#include "filters/seif_slam.hpp"
 
 #include <algorithm>
 #include <array>

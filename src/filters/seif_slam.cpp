@@ -1,7 +1,7 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
-#include <seif/core/sparse_marginals.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "core/sparse_marginals.hpp"
+#include "filters/seif_slam.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

@@ -3,7 +3,7 @@
 // update the filter, the robot is marginalised out and relocalised from the rest (z_beta).
 // H stays exactly sparse; nothing is conditioned away.
 #include <seif/core/errors.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include "filters/seif_slam.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

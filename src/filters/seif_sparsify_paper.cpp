@@ -1,7 +1,7 @@
 // The paper's sparsification (SeifOptions::Sparsify::Seif; algorithm.md §4, paper eq.
 // 44-51): the surplus of active landmarks is conditioned away. One file per sparsifier:
 // this one and seif_sparsify_eseif.cpp; SeifSlam::update chooses by SeifOptions::sparsify.
-#include <seif/filters/seif_slam.hpp>
+#include "filters/seif_slam.hpp"
 
 #include <algorithm>
 

@@ -1,5 +1,5 @@
 #include <seif/core/errors.hpp>
-#include <seif/filters/seif_store.hpp>
+#include "filters/seif_store.hpp"
 
 #include <Eigen/Cholesky>
 #include <algorithm>

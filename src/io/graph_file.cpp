@@ -1,8 +1,8 @@
 // Readers and writer of the iSAM and g2o pose-graph formats (include/seif/io/graph_file.hpp).
 #include <seif/core/errors.hpp>
-#include <seif/io/atomic_file.hpp>
+#include "io/atomic_file.hpp"
 #include <seif/io/graph_file.hpp>
-#include <seif/io/text_table.hpp>
+#include "io/text_table.hpp"
 #include <seif/models/cartesian.hpp>
 #include <seif/models/odometry_model.hpp>
 #include <seif/models/range_bearing.hpp>

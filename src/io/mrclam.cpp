@@ -2,9 +2,9 @@
 // ../shared/data/README.md). Files are read whole and parsed with std::from_chars: the
 // 62k-line odometry files of dataset 6 take a few milliseconds.
 #include <seif/core/errors.hpp>
-#include <seif/io/atomic_file.hpp>
+#include "io/atomic_file.hpp"
 #include <seif/io/mrclam.hpp>
-#include <seif/io/text_table.hpp>
+#include "io/text_table.hpp"
 
 #include "mrclam_rows.hpp"
 

@@ -2,7 +2,7 @@
 // The rows of the MRCLAM files, parsed with every check: shared by readMrclam (whole files)
 // and the streaming MRCLAM source (line by line). Internal to src/io.
 #include <seif/core/dataset.hpp>
-#include <seif/io/text_table.hpp>
+#include "io/text_table.hpp"
 
 #include <map>
 #include <optional>

@@ -1,5 +1,5 @@
 // The MRCLAM layout as a streaming EventSource (include/seif/io/mrclam_source.hpp).
-#include <seif/io/mrclam_source.hpp>
+#include "io/mrclam_source.hpp"
 #include <seif/models/range_bearing.hpp>
 
 #include "mrclam_rows.hpp"

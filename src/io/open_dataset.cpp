@@ -2,8 +2,8 @@
 #include <seif/core/errors.hpp>
 #include <seif/io/event_source.hpp>
 #include <seif/io/graph_file.hpp>
-#include <seif/io/mrclam_source.hpp>
-#include <seif/io/victoria_park.hpp>
+#include "io/mrclam_source.hpp"
+#include "io/victoria_park.hpp"
 
 namespace seif {
 

@@ -1,5 +1,5 @@
 #include <seif/core/errors.hpp>
-#include <seif/io/atomic_file.hpp>
+#include "io/atomic_file.hpp"
 #include <seif/io/results.hpp>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-#include <seif/io/robot_log_source.hpp>
+#include "io/robot_log_source.hpp"
 #include <seif/models/range_bearing.hpp>
 
 #include <limits>

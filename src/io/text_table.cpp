@@ -1,5 +1,5 @@
 // The strict text-table parser shared by every reader (include/seif/io/text_table.hpp).
-#include <seif/io/text_table.hpp>
+#include "io/text_table.hpp"
 
 #include <charconv>
 #include <cmath>

@@ -1,6 +1,6 @@
 // Reader of the Victoria Park folder (include/seif/io/victoria_park.hpp).
-#include <seif/io/text_table.hpp>
-#include <seif/io/victoria_park.hpp>
+#include "io/text_table.hpp"
+#include "io/victoria_park.hpp"
 #include <seif/models/range_bearing.hpp>
 
 #include <cmath>

@@ -4,7 +4,7 @@
 #include <seif/models/ackermann_model.hpp>
 #include <seif/models/odometry_model.hpp>
 #include <seif/models/velocity_model.hpp>
-#include <seif/models/velocity_motion.hpp>
+#include "models/velocity_motion.hpp"
 
 #include <cmath>
 #include <sstream>

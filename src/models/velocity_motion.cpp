@@ -1,5 +1,5 @@
 #include <seif/core/angles.hpp>
-#include <seif/models/velocity_motion.hpp>
+#include "models/velocity_motion.hpp"
 
 #include <cmath>
 

@@ -6,7 +6,7 @@
 
 #include <seif/core/angles.hpp>
 #include <seif/models/range_bearing.hpp>
-#include <seif/models/velocity_motion.hpp>
+#include "models/velocity_motion.hpp"
 
 #include "landmark_grid.hpp"
 #include "path.hpp"

@@ -9,7 +9,7 @@
 #include <seif/eval/run.hpp>
 #include <seif/eval/stats.hpp>
 #include <seif/filters/factory.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include <seif/filters/seif_options.hpp>
 #include <seif/filters/slam_filter.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/sim/world.hpp>

@@ -11,7 +11,7 @@
 // when the dataset has it (trajectory interpolated at the GPS stamps inside its span, after
 // the best rigid 2-D alignment, metres).
 #include <seif/eval/run.hpp>
-#include <seif/filters/seif_slam.hpp>
+#include <seif/filters/seif_options.hpp>
 #include <seif/io/event_source.hpp>
 
 #include <filesystem>

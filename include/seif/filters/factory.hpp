@@ -1,7 +1,7 @@
 #pragma once
 // Builds any filter from its spec: a name ("ekf", "eif", "seif", "batch") and options,
 // "seif:sparsify=eseif,linearization=fej" (the form `--filter` and `--filters` take).
-#include <seif/filters/seif_slam.hpp>
+#include <seif/filters/seif_options.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <memory>

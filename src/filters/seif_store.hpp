@@ -5,8 +5,8 @@
 // The filter's steps work on a small dense block gathered from it (the robot and listed
 // landmarks, at most kMaxLocalLandmarks) and scattered back; the amortised mean relaxes one
 // variable at a time on it (eq. 42). Only new landmarks and new links allocate.
-#include <seif/filters/information_ops.hpp>
-#include <seif/filters/landmark_book.hpp>
+#include "filters/information_ops.hpp"
+#include "filters/landmark_book.hpp"
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/SparseCore>

@@ -17,8 +17,8 @@
 // top-left block of the KKT inverse at the solution (columns by solves with the factor).
 // Observations the outlier gate rejects (at the inner EKF's estimate, as the EKF would)
 // are left out of the batch too.
-#include <seif/filters/ekf_slam.hpp>
-#include <seif/filters/landmark_book.hpp>
+#include "filters/ekf_slam.hpp"
+#include "filters/landmark_book.hpp"
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Core>

@@ -7,8 +7,8 @@
 // information), and commits it; nothing in the book changes before the commit, so an
 // update that fails leaves the book as it was.
 #include <seif/core/types.hpp>
-#include <seif/filters/first_estimates.hpp>
-#include <seif/filters/outlier_gate.hpp>
+#include "filters/first_estimates.hpp"
+#include "filters/outlier_gate.hpp"
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Core>

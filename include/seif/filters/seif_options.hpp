@@ -1,0 +1,64 @@
+#pragma once
+// The SEIF's options (filter specs "seif:key=value,...", filters/factory.hpp): how many
+// landmarks stay active, how the mean is recovered, how the robot's links are bounded.
+#include <cstdint>
+#include <string_view>
+
+namespace seif {
+
+struct SeifOptions {
+  enum class Mean { Amortized, Exact };
+  enum class Deactivate { Weakest, Oldest };
+  enum class Recovery { AfterMeasurement, BeforeMeasurement };
+  enum class RelaxOrder { Random, Cyclic };
+  enum class Sparsify { Seif, Eseif };
+  enum class Covariance { Exact, Local };
+
+  int max_active = 6;  ///< theta_x: landmarks linked to the robot after each step
+  int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
+                       ///< (at most every landmark once: K is capped at the map size)
+  /// Amortized: constant-time coordinate descent. Exact: sparse Cholesky solve of H mu = b
+  /// after every update ("SEIF with exact mu" in the paper's table; not constant time).
+  Mean mean = Mean::Amortized;
+  /// Weakest: deactivate the landmarks with the weakest normalised link to the robot (the
+  /// paper). Oldest: those observed least recently.
+  Deactivate deactivate = Deactivate::Weakest;
+  /// When the amortised mean is relaxed within update(): BeforeMeasurement (default) is the
+  /// book's order (Probabilistic Robotics Table 12.1): the measurement update linearises at
+  /// a freshly relaxed mean. AfterMeasurement lets the sparsification and the next motion
+  /// update use a mean that already contains the newest measurements. docs/seif.md compares them.
+  Recovery recovery = Recovery::BeforeMeasurement;
+  /// Which K landmarks each step relaxes: the next K in map order, Cyclic (default: each
+  /// landmark at the same rate, and neighbours in the map tend to be neighbours in memory,
+  /// so a huge map's cache misses stay down), or drawn uniformly at Random (the paper; `seif
+  /// paper` uses it). Equally accurate on the paper's world; docs/seif.md has the numbers.
+  RelaxOrder relax_order = RelaxOrder::Cyclic;
+  std::uint64_t seed = 1;  ///< for the random choice of relaxed landmarks
+  /// How the robot's links are kept at max_active: Seif conditions the surplus away (paper
+  /// eq. 44-51; overconfident, Eustice et al. 2005). Eseif marginalises the robot out and
+  /// relocalises it from part of the current measurements (Walter, Eustice, Leonard 2007):
+  /// H stays exactly sparse and nothing is conditioned away.
+  Sparsify sparsify = Sparsify::Seif;
+  /// How poseCovariance() and landmarkCovariance() are recovered. Exact: from the sparse
+  /// Cholesky factor of H and its selected inverse, one factorisation per changed H (O(N)
+  /// at the paper's sparsity, cached: every marginal of one state costs it once). Local: the
+  /// inverse of H restricted to the variable's Markov blanket (the robot and the active
+  /// landmarks; a landmark and its neighbours), O(1): it conditions on everything outside,
+  /// so it is smaller than the marginal - an approximation for display, not for gating.
+  Covariance covariance = Covariance::Exact;
+  /// Eseif: how many landmarks' observations relocalise the robot (z_beta), best informed
+  /// first, when the step has that many: >= 2 (a 2-D point sensor's least for the 3-dof
+  /// pose); fewer when the step has fewer (but 2), more while the pose is ill-conditioned,
+  /// never more than max_active. More give a better relocalised pose (docs: the paper's
+  /// world's map error is several times smaller with 4 than with 2).
+  int eseif_beta = 2;
+
+  static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
+  static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
+  static Recovery parseRecovery(std::string_view s);      ///< "after-update" | "before-update"
+  static RelaxOrder parseRelaxOrder(std::string_view s);  ///< "random" | "cyclic"
+  static Sparsify parseSparsify(std::string_view s);      ///< "seif" | "eseif"
+  static Covariance parseCovariance(std::string_view s);  ///< "exact" | "local"
+};
+
+}  // namespace seif
