@@ -25,10 +25,13 @@
 #include <seif/eval/run_dataset.hpp>
 #include <seif/eval/run_loop.hpp>
 #include <seif/eval/step_assembler.hpp>
+#include <seif/eval/stats.hpp>
+#include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/filters/slam_filter.hpp>
 #include <seif/io/event_source.hpp>
 #include <seif/io/graph_file.hpp>
+#include <seif/io/mrclam.hpp>
 #include <seif/io/results.hpp>
 #include <seif/models/ackermann_model.hpp>
 #include <seif/models/cartesian.hpp>
