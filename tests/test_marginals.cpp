@@ -223,3 +223,10 @@ INSTANTIATE_TEST_SUITE_P(Filters, UpdateIsAllOrNothing,
                          });
 
 }  // namespace
+
+TEST(FilterSpecs, SeedsAreUnsigned64BitIntegers) {
+  EXPECT_EQ(parseFilterSpec("seif:seed=18446744073709551615").seif.seed, 18446744073709551615ull);
+  EXPECT_THROW(parseFilterSpec("seif:seed=-1"), InvalidArgument);
+  EXPECT_THROW(parseFilterSpec("seif:seed=18446744073709551616"), InvalidArgument);
+  EXPECT_EQ(SeifOptions{}.eseif_beta, 4);  // the CLI's --beta default too
+}

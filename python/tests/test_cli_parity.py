@@ -14,7 +14,7 @@ def as_written(values):
     return np.vectorize(lambda v: float(f"{v:.9g}"))(np.asarray(values, dtype=float))
 
 
-# The CLI's --beta defaults to 4, the library's SeifOptions.eseif_beta to 2: the CLI is
+# The CLI and the library share --beta = SeifOptions.eseif_beta = 4; the CLI is
 # pinned to the library's default so that both runs use the same options.
 LIBRARY_BETA = ["--beta", str(seif.SeifOptions().eseif_beta)]
 

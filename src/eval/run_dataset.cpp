@@ -76,7 +76,9 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"dropped", dropped},
   };
   if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
-  if (r.filter == "seif") j["seif"] = toJson(request.seif);
+  // The SEIF options the filter ran with: the flags' as the spec's own options override them.
+  const FilterSpec spec = parseFilterSpec(r.filter, Linearization::Standard, request.seif);
+  if (spec.name == "seif") j["seif"] = toJson(spec.seif);
   return j.dump(2) + "\n";
 }
 

@@ -26,6 +26,15 @@ int parseInt(std::string_view text, std::string_view key, std::string_view value
   return v;
 }
 
+std::uint64_t parseSeed(std::string_view text, std::string_view value) {
+  std::uint64_t v = 0;
+  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
+  if (ec != std::errc() || end != value.data() + value.size()) {
+    badSpec(text, "seed=" + std::string(value) + " is not an integer in [0, 2^64 - 1]");
+  }
+  return v;
+}
+
 }  // namespace
 
 FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, const SeifOptions& seif) {
@@ -67,7 +76,7 @@ FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, c
       else if (key == "recovery") spec.seif.recovery = SeifOptions::parseRecovery(value);
       else if (key == "relax-order") spec.seif.relax_order = SeifOptions::parseRelaxOrder(value);
       else if (key == "covariance") spec.seif.covariance = SeifOptions::parseCovariance(value);
-      else if (key == "seed") spec.seif.seed = static_cast<std::uint64_t>(parseInt(text, key, value));
+      else if (key == "seed") spec.seif.seed = parseSeed(text, value);
       else {
         badSpec(text, "unknown option '" + std::string(key) +
                           "' (seif takes linearization, sparsify, beta, active, relax, mean, deactivate, "

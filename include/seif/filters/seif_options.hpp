@@ -51,7 +51,7 @@ struct SeifOptions {
   /// pose); fewer when the step has fewer (but 2), more while the pose is ill-conditioned,
   /// never more than max_active. More give a better relocalised pose (docs: the paper's
   /// world's map error is several times smaller with 4 than with 2).
-  int eseif_beta = 2;
+  int eseif_beta = 4;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
