@@ -152,6 +152,10 @@ void bindConfig(py::module_& m) {
 
 void bindSlamFilter(py::module_& m) {
   using Columns = Eigen::Matrix<double, Eigen::Dynamic, 2>;
+  py::enum_<MarginalMode>(m, "MarginalMode", "How a marginal is computed (SlamFilter.marginal)")
+      .value("Exact", MarginalMode::Exact, "the posterior's marginal")
+      .value("Local", MarginalMode::Local, "from the queried variables' Markov blanket (never larger than Exact)");
+
   py::class_<SlamFilter>(m, "SlamFilter",
                          "The interface of every filter (EKF, EIF, SEIF, batch MAP). Build one with make_filter().\n"
                          "State order [x, y, theta, l1x, l1y, ...], landmarks in the order they entered the map.")
@@ -184,13 +188,29 @@ void bindSlamFilter(py::module_& m) {
                              "describe() of the config's sensor model")
       .def(
           "predict_measurement",
-          [](const SlamFilter& f, int id, const MeasurementModel* sensor, const std::optional<Mat2>& R) {
+          [](const SlamFilter& f, int id, const MeasurementModel* sensor, const std::optional<Mat2>& R,
+             MarginalMode mode) {
             const MeasurementModel& s = sensor ? *sensor : f.sensorModel();
-            return f.predictMeasurement(id, s, R ? *R : s.noise());
+            return f.predictMeasurement(id, s, R ? *R : s.noise(), mode);
           },
-          py::arg("id"), py::arg("sensor") = nullptr, py::arg("R") = py::none(),
+          py::arg("id"), py::arg("sensor") = nullptr, py::arg("R") = py::none(), py::arg("mode") = MarginalMode::Exact,
           "Predicted measurement of landmark `id` and its innovation covariance S = J Sigma J^T + R "
-          "(defaults: the config's sensor and its noise). Raises UnknownLandmark.")
+          "over the joint marginal of pose and landmark (`mode`: MarginalMode.Exact or Local; "
+          "defaults: the config's sensor and its noise). Raises UnknownLandmark.")
+      .def(
+          "marginal",
+          [](const SlamFilter& f, const std::vector<int>& ids, bool pose, MarginalMode mode) {
+            const Marginal joint = f.marginal(ids, pose, mode);
+            return py::make_tuple(joint.mean, joint.covariance);
+          },
+          py::arg("landmark_ids"), py::arg("pose") = true, py::arg("mode") = MarginalMode::Exact,
+          "(mean, covariance) of the pose (when `pose`) and the landmarks `landmark_ids`, in that order. "
+          "Exact: the posterior's marginal; Local: from the Markov blanket, constant time in the SEIF, "
+          "never larger than Exact. Raises UnknownLandmark.")
+      .def("remove_landmark", &SlamFilter::removeLandmark, py::arg("id"),
+           "Takes the landmark out of the map exactly (its marginal out of the posterior).")
+      .def("merge_landmarks", &SlamFilter::mergeLandmarks, py::arg("keep"), py::arg("drop"),
+           "Merges `drop` into `keep` (the posterior conditioned on their equality).")
       .def("pose", &SlamFilter::pose, "(x, y, theta), heading wrapped")
       .def("pose_covariance", &SlamFilter::poseCovariance, "3x3 marginal covariance of the pose")
       .def("landmark_ids", &SlamFilter::landmarkIds, "ids in state order")

@@ -58,3 +58,24 @@ def test_checkpoint_extras_and_errors(paper_world, tmp_path):
     batch = seif.make_filter("batch", seif.start_pose(data), paper_config(world))
     with pytest.raises(seif.InvalidArgument, match="batch"):
         pickle.dumps(batch)
+
+
+def test_marginal_remove_and_merge_from_python(paper_world):
+    data, world = paper_world
+    f = seif.make_filter("eif", seif.start_pose(data), paper_config(world))
+    for step in data.steps[:200]:
+        f.step(step.u, step.observations)
+    ids = f.landmark_ids()
+    mean, cov = f.marginal([ids[0], ids[2]])
+    dense = f.covariance()
+    rows = [0, 1, 2, 3, 4, 7, 8]  # pose, slot 0, slot 2
+    np.testing.assert_allclose(cov, dense[np.ix_(rows, rows)], rtol=1e-8, atol=1e-14)
+    np.testing.assert_array_equal(mean, f.mean()[rows])
+    _, local = f.marginal([ids[0]], mode=seif.MarginalMode.Local)
+    assert np.trace(local) <= np.trace(dense[np.ix_([0, 1, 2, 3, 4], [0, 1, 2, 3, 4])]) + 1e-15
+    f.remove_landmark(ids[1])
+    assert not f.has_landmark(ids[1])
+    f.merge_landmarks(ids[0], ids[3])
+    assert f.has_landmark(ids[0]) and not f.has_landmark(ids[3])
+    with pytest.raises(seif.UnknownLandmark):
+        f.marginal([ids[1]])
