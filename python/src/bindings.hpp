@@ -24,6 +24,7 @@ void bindFilters(py::module_& m);     // filters.cpp
 void bindIo(py::module_& m);          // io.cpp: readers, simulator, result files
 void bindEval(py::module_& m);        // eval.cpp: run loop, metrics, experiments
 void bindCheckpoints(py::module_& m); // checkpoint.cpp: save, load, pickling
+void bindRunLoop(py::module_& m);     // run_loop.cpp: run_loop, RunObserver
 
 /// A C++ enum bound as a Python enum that is also constructible from, and implicitly
 /// converted from, the library's lower-case name ("per-step", "fej", ...): every argument

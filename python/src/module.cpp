@@ -30,4 +30,5 @@ PYBIND11_MODULE(_core, m) {
   sp::bindIo(m);
   sp::bindEval(m);
   sp::bindCheckpoints(m);
+  sp::bindRunLoop(m);
 }

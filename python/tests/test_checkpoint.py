@@ -79,3 +79,32 @@ def test_marginal_remove_and_merge_from_python(paper_world):
     assert f.has_landmark(ids[0]) and not f.has_landmark(ids[3])
     with pytest.raises(seif.UnknownLandmark):
         f.marginal([ids[1]])
+
+
+def test_run_loop_with_a_python_observer(paper_world):
+    data, world = paper_world
+
+    class Recorder(seif.RunObserver):
+        def __init__(self):
+            super().__init__()
+            self.steps, self.finished = [], False
+
+        def after_update(self, filter, step, k, seconds):
+            self.steps.append((k, filter.pose()))
+
+        def on_finish(self, filter, seconds):
+            self.finished = True
+
+    rec = Recorder()
+    f = seif.make_filter("seif", seif.start_pose(data), paper_config(world))
+    n = seif.run_loop(f, data, [rec])
+    assert n == len(data.steps) and rec.finished
+    assert [k for k, _ in rec.steps] == list(range(len(data.steps)))
+    g = seif.make_filter("seif", seif.start_pose(data), paper_config(world))
+    seif.run_filter(g, data)
+    np.testing.assert_array_equal(f.mean(), g.mean())
+    np.testing.assert_array_equal(rec.steps[-1][1], g.pose())
+    # An association hook that drops every observation: the map stays empty.
+    h = seif.make_filter("ekf", seif.start_pose(data), paper_config(world))
+    seif.run_loop(h, data, associate=lambda filt, step, k, z: [])
+    assert h.landmark_ids() == []
