@@ -194,9 +194,9 @@ TEST(Checkpoint, FilesExtrasAndModels) {
     EXPECT_TRUE(sameBits(g2->poseCovariance(), f->poseCovariance()));
     EXPECT_TRUE(saveToBytes(*g2, extras) == saveToBytes(*f, extras));
     if (const auto* seif = dynamic_cast<const SeifSlam*>(g2.get())) {
-      EXPECT_EQ(seif->options().max_active, 3);
+      EXPECT_EQ(seif->options().active, 3);
       EXPECT_EQ(seif->options().seed, 9u);
-      EXPECT_EQ(seif->options().eseif_beta, 3);
+      EXPECT_EQ(seif->options().beta, 3);
       EXPECT_EQ(seif->options().sparsify, SeifOptions::Sparsify::Eseif);
     }
   }

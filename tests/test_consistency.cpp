@@ -124,7 +124,7 @@ TEST(Consistency, BadOptionsAreRejected) {
   const seif::FilterSpec s = seif::parseFilterSpec("seif:sparsify=eseif,linearization=fej,active=4");
   EXPECT_EQ(s.seif.sparsify, seif::SeifOptions::Sparsify::Eseif);
   EXPECT_EQ(s.linearization, seif::Linearization::FirstEstimates);
-  EXPECT_EQ(s.seif.max_active, 4);
+  EXPECT_EQ(s.seif.active, 4);
 }
 
 TEST(ConsistencyCli, WritesTheTableJsonAndCsv) {

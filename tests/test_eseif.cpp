@@ -22,11 +22,11 @@ using namespace seif;
 
 using test::configFor;
 
-SeifOptions eseifOptions(SeifOptions::Mean mean, int max_active) {
+SeifOptions eseifOptions(SeifOptions::Mean mean, int active) {
   SeifOptions o;
   o.sparsify = SeifOptions::Sparsify::Eseif;
   o.mean = mean;
-  o.max_active = max_active;
+  o.active = active;
   return o;
 }
 
@@ -101,7 +101,7 @@ TEST(Eseif, InventsNoInformationUnlikeTheSeifsConditioning) {
     EXPECT_EQ(overconfidentSteps(s, eseifOptions(SeifOptions::Mean::Exact, 3), kTolerance), 0) << seed;
     SeifOptions seif;
     seif.mean = SeifOptions::Mean::Exact;
-    seif.max_active = 3;
+    seif.active = 3;
     EXPECT_GT(overconfidentSteps(s, seif, kTolerance), 100) << seed;
   }
 }
@@ -153,7 +153,7 @@ TEST(Eseif, RelocalisedRobotIsLinkedOnlyToZBetaAndSeesItsMeasurements) {
   for (int beta : {2, 3}) {
   const test::Scenario s = test::makeScenario(21, 40, 300);
   SeifOptions options = eseifOptions(SeifOptions::Mean::Amortized, 3);
-  options.eseif_beta = beta;
+  options.beta = beta;
   SeifSlam seif(s.start, configFor(s), options);
   std::size_t relocalized = 0, full = 0;
   for (const Step& step : s.steps) {
@@ -161,8 +161,8 @@ TEST(Eseif, RelocalisedRobotIsLinkedOnlyToZBetaAndSeesItsMeasurements) {
     seif.step(step.u, step.observations);
     if (seif.eseifRelocalizations() == before) continue;
     ++relocalized;
-    // z_beta: eseif_beta observations of mapped landmarks when the step has them, at least
-    // 2 (more for a well-conditioned pose, at most max_active), all made in this step.
+    // z_beta: beta observations of mapped landmarks when the step has them, at least
+    // 2 (more for a well-conditioned pose, at most options.active), all made in this step.
     ASSERT_GE(seif.robotLinks(), 2u);
     ASSERT_LE(seif.robotLinks(), 3u);
     full += seif.robotLinks() == static_cast<std::size_t>(beta) ? 1 : 0;
@@ -186,15 +186,15 @@ TEST(Eseif, RelocalisedRobotIsLinkedOnlyToZBetaAndSeesItsMeasurements) {
 TEST(Eseif, SpecSelectsItAndBetaIsValidated) {
   const FilterSpec spec = parseFilterSpec("seif:sparsify=eseif,beta=3,active=5");
   EXPECT_EQ(spec.seif.sparsify, SeifOptions::Sparsify::Eseif);
-  EXPECT_EQ(spec.seif.eseif_beta, 3);
+  EXPECT_EQ(spec.seif.beta, 3);
   EXPECT_THROW(parseFilterSpec("ekf:beta=3"), seif::InvalidArgument);
   SeifOptions o = eseifOptions(SeifOptions::Mean::Amortized, 4);
-  o.eseif_beta = 1;
+  o.beta = 1;
   EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), seif::InvalidArgument);
 }
 
 TEST(Eseif, WithoutAUsableZBetaItDefersThenFallsBackAndCounts) {
-  // max_active = 1 leaves no room for the two landmarks a relocalisation needs: the active
+  // active = 1 leaves no room for the two landmarks a relocalisation needs: the active
   // set grows until the local block is full, then the SEIF's conditioning takes over.
   const test::Scenario s = test::makeScenario(8, 60, 300);
   SeifSlam seif(s.start, configFor(s), eseifOptions(SeifOptions::Mean::Amortized, 1));

@@ -228,5 +228,5 @@ TEST(FilterSpecs, SeedsAreUnsigned64BitIntegers) {
   EXPECT_EQ(parseFilterSpec("seif:seed=18446744073709551615").seif.seed, 18446744073709551615ull);
   EXPECT_THROW(parseFilterSpec("seif:seed=-1"), InvalidArgument);
   EXPECT_THROW(parseFilterSpec("seif:seed=18446744073709551616"), InvalidArgument);
-  EXPECT_EQ(SeifOptions{}.eseif_beta, 4);  // the CLI's --beta default too
+  EXPECT_EQ(SeifOptions{}.beta, 4);  // the CLI's --beta default too
 }

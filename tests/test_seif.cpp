@@ -38,7 +38,7 @@ TEST(Seif, WithoutSparsificationAndExactMeanItIsTheEif) {
   for (std::uint64_t seed : {1u, 4u}) {
     const test::Scenario s = test::makeScenario(seed, 25, 200);
     SeifOptions o;
-    o.max_active = kMaxLocalLandmarks - 1;  // larger than the map: never sparsifies
+    o.active = kMaxLocalLandmarks - 1;  // larger than the map: never sparsifies
     o.mean = SeifOptions::Mean::Exact;
     SeifSlam seif(s.start, configFor(s), o);
     EifSlam eif(s.start, configFor(s));
@@ -93,7 +93,7 @@ TEST(Seif, InvariantsHoldAfterEveryStepOfALongRun) {
     for (const Step& step : s.steps) {
       seif.step(step.u, step.observations);
       const FilterStats st = seif.stats();
-      ASSERT_LE(st.robot_links, static_cast<std::size_t>(o.max_active)) << "step " << k;
+      ASSERT_LE(st.robot_links, static_cast<std::size_t>(o.active)) << "step " << k;
       ASSERT_LT(seif.lastSparsificationResidual(), 1e-9) << "step " << k;
       const Eigen::MatrixXd H = seif.information();
       ASSERT_LE((H - H.transpose()).cwiseAbs().maxCoeff(), 1e-12 * H.cwiseAbs().maxCoeff()) << "step " << k;
@@ -121,7 +121,7 @@ TEST(Seif, SparsificationInsideTheFilterKeepsTheMeanAndZeroesTheLinks) {
   // whose result must have the same H^-1 b and no robot link beyond theta_x.
   const test::Scenario s = test::makeScenario(12, 40, 200);
   SeifOptions o;
-  o.max_active = 3;
+  o.active = 3;
   SeifSlam seif(s.start, configFor(s), o);
   int sparsified = 0;
   for (const Step& step : s.steps) {
@@ -191,9 +191,9 @@ TEST(Seif, AccuracyIsCloseToTheEkf) {
 
 TEST(Seif, OptionsAreValidated) {
   SeifOptions o;
-  o.max_active = 0;
+  o.active = 0;
   EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), seif::InvalidArgument);
-  o.max_active = 6;
+  o.active = 6;
   o.relax = -1;
   EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), seif::InvalidArgument);
   EXPECT_EQ(SeifOptions::parseMean("exact"), SeifOptions::Mean::Exact);

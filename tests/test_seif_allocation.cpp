@@ -136,7 +136,7 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateSteps) { expectNoHeapAllocatio
 TEST(SeifAllocation, NoHeapAllocationInSteadyStateEseifSteps) {
   seif::SeifOptions options;
   options.sparsify = seif::SeifOptions::Sparsify::Eseif;
-  options.max_active = 4;
+  options.active = 4;
   EXPECT_GT(expectNoHeapAllocationInSteadyStateSteps(options), 500u);
 }
 

@@ -57,7 +57,7 @@ Scaling runCorridor(int landmarks, long m_limit) {
   config.noise = world.noise;
   const SeifOptions options;  // theta_x = 6, K = 10: the paper's
   SeifSlam seif(startPose(data), config, options);
-  const long theta = options.max_active, K = options.relax;
+  const long theta = options.active, K = options.relax;
   constexpr std::size_t kWarmUp = 20;  // until the active set is full
   Scaling s;
   s.worst_slack = -1'000'000;
@@ -92,7 +92,7 @@ void print(const char* name, const Scaling& s) {
 }  // namespace
 
 TEST(SeifScaling, BlocksTouchedPerStepAreBoundedByTheSameConstantAt100And100000Landmarks) {
-  const long theta = SeifOptions{}.max_active, K = SeifOptions{}.relax;
+  const long theta = SeifOptions{}.active, K = SeifOptions{}.relax;
   const Scaling small = runCorridor(100, kMaxObservations);
   const Scaling large = runCorridor(100000, small.max_observations);
   print("N = 10^2", small);

@@ -124,9 +124,7 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--filter", args->filter,
                   "ekf (dense covariance), eif (dense information), seif, or batch (the MAP smoother\n"
                   "over every pose and landmark: the reference), with options after a colon, e.g.\n"
-                  "seif:sparsify=eseif,linearization=fej (keys: linearization=standard|fej; for the\n"
-                  "seif sparsify=seif|eseif, active, relax, mean, deactivate, recovery, relax-order,\n"
-                  "covariance=exact|local, seed); options given here override the --active... flags")
+                  "seif:sparsify=eseif,linearization=fej; " + filterSpecHelp())
       ->check(filterSpecs())
       ->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->capture_default_str();

@@ -131,60 +131,50 @@ CLI::Validator filterSpecs() {
 }
 
 void SeifFlags::add(CLI::App& cmd) {
-  cmd.add_option("--active", active,
-                 "SEIF: theta_x, landmarks kept linked to the robot (the paper: 6)")
-      ->transform(integerIn(1, kMaxLocalLandmarks - 1))
-      ->capture_default_str();
-  cmd.add_option("--relax", relax,
-                 "SEIF: K, landmarks relaxed per step besides the robot and the active ones "
-                 "(at most every landmark once: K is capped at the map size)")
-      ->transform(integerIn(0, INT_MAX))
-      ->capture_default_str();
-  cmd.add_option("--mean", mean,
-                 "SEIF mean recovery: amortized (constant time) or exact (sparse Cholesky each step)")
-      ->check(CLI::IsMember({"amortized", "exact"}))
-      ->capture_default_str();
-  cmd.add_option("--deactivate", deactivate,
-                 "SEIF sparsification: deactivate the weakest-linked or the oldest-seen landmarks")
-      ->check(CLI::IsMember({"weakest", "oldest"}))
-      ->capture_default_str();
-  cmd.add_option("--recovery", recovery,
-                 "SEIF: relax the amortized mean before the measurement update (the book's order) "
-                 "or after it; see docs/seif.md")
-      ->check(CLI::IsMember({"after-update", "before-update"}))
-      ->capture_default_str();
-  cmd.add_option("--relax-order", relax_order,
-                 "SEIF: the K relaxed landmarks are taken cyclically in map order, or drawn at random "
-                 "(the paper; slower in huge maps: cache misses)")
-      ->check(CLI::IsMember({"random", "cyclic"}))
-      ->capture_default_str();
-  cmd.add_option("--sparsify", sparsify,
-                 "SEIF: how the robot's links are kept at theta_x: eseif (marginalise the robot out and\n"
-                 "relocalise it from --beta of the current observations: H exactly sparse, nothing\n"
-                 "conditioned away; honest covariances where >= beta landmarks are seen at once) or seif\n"
-                 "(the paper's conditioning: overconfident, better with few landmarks in view)")
-      ->check(CLI::IsMember({"seif", "eseif"}))
-      ->capture_default_str();
-  cmd.add_option("--beta", beta, "ESEIF: landmarks whose observations relocalise the robot (>= 2)")
-      ->transform(integerIn(2, kMaxLocalLandmarks - 1))
-      ->capture_default_str();
-  cmd.add_option("--seed", seed, "SEIF: seed of the random choice of relaxed landmarks")
-      ->transform(seedValue())
-      ->capture_default_str();
+  FilterSpec defaults;
+  defaults.name = "seif";
+  for (const FilterOption& o : filterOptions()) {
+    if (o.scope != FilterOption::Scope::Seif) continue;
+    std::string& value = values[std::string(o.key)];
+    value = o.get(defaults);
+    CLI::Option* flag = cmd.add_option("--" + std::string(o.key), value, "SEIF: " + std::string(o.help));
+    switch (o.kind) {
+      case FilterOption::Kind::Choice: {
+        std::vector<std::string> choices;
+        for (std::string_view rest = o.choices; !rest.empty();) {
+          const std::size_t bar = rest.find('|');
+          choices.emplace_back(rest.substr(0, bar));
+          rest = bar == std::string_view::npos ? std::string_view() : rest.substr(bar + 1);
+        }
+        flag->check(CLI::IsMember(choices));
+        break;
+      }
+      case FilterOption::Kind::Integer: flag->transform(integerIn(o.min, o.max)); break;
+      case FilterOption::Kind::Seed: flag->transform(seedValue()); break;
+    }
+    flag->capture_default_str();
+  }
 }
 
 SeifOptions SeifFlags::resolve() const {
-  SeifOptions o;
-  o.max_active = active;
-  o.relax = relax;
-  o.mean = SeifOptions::parseMean(mean);
-  o.deactivate = SeifOptions::parseDeactivate(deactivate);
-  o.recovery = SeifOptions::parseRecovery(recovery);
-  o.relax_order = SeifOptions::parseRelaxOrder(relax_order);
-  o.sparsify = SeifOptions::parseSparsify(sparsify);
-  o.eseif_beta = beta;
-  o.seed = seed;
-  return o;
+  FilterSpec spec;
+  spec.name = "seif";
+  for (const FilterOption& o : filterOptions()) {
+    const auto it = values.find(std::string(o.key));
+    if (it != values.end()) o.set(spec, it->second);
+  }
+  return spec.seif;
+}
+
+std::string filterSpecHelp() {
+  std::string all, seif;
+  for (const FilterOption& o : filterOptions()) {
+    std::string& list = o.scope == FilterOption::Scope::Seif ? seif : all;
+    list.append(list.empty() ? "" : ", ").append(o.key);
+    if (o.kind == FilterOption::Kind::Choice) list.append("=").append(o.choices);
+  }
+  return "keys: " + all + " (every filter but the batch); for the seif " + seif +
+         " (the flags of the same names set the defaults)";
 }
 
 Progress::Progress(std::string label) : label_(std::move(label)), tty_(isatty(STDERR_FILENO) != 0) {}

@@ -50,22 +50,17 @@ struct NoiseFlags {
   DatasetOptions resolve() const;
 };
 
-/// --active/--relax/--mean/--deactivate/--seed of the SEIF.
+/// The SEIF's options as flags, one per SEIF row of the filter option table
+/// (filterOptions(): --active, --relax, --sparsify, ...), with the library's defaults. A
+/// spec's own keys (--filter seif:active=4) override them.
 struct SeifFlags {
-  int active = 6;
-  int relax = 10;
-  std::string mean = "amortized";
-  std::string deactivate = "weakest";
-  std::string recovery = "before-update";
-  std::string relax_order = "cyclic";
-  /// The paper's conditioning (seif) or the ESEIF's exact sparsification (eseif), which
-  /// relocalises the robot from `beta` landmarks; README "Which SEIF" compares them.
-  std::string sparsify = "seif";
-  int beta = 4;
-  std::uint64_t seed = 1;
+  std::map<std::string, std::string> values;  ///< option key -> value as typed
   void add(CLI::App& cmd);
   SeifOptions resolve() const;
 };
+
+/// The keys a filter spec takes, for --filter's help (from filterOptions()).
+std::string filterSpecHelp();
 
 /// A progress bar on stderr when it is a terminal; silent otherwise.
 class Progress {

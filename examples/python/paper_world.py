@@ -36,9 +36,9 @@ for spec, f in filters.items():
     print(f"{spec:16s} {rmse:12.4f} {aligned:11.4f} {out.final_stats.links:6d} "
           f"{1e6 * out.seconds / out.steps:8.1f} {H.nnz:7d}")
 
-# --- 4. What sparsity means: the SEIF's robot is linked to at most max_active landmarks. ------
+# --- 4. What sparsity means: the SEIF's robot is linked to at most `active` (theta_x) landmarks. --
 seif_filter = filters["seif"]
 print(f"SEIF active landmarks now: {seif_filter.active_landmarks()} "
-      f"(max_active = {seif_filter.options.max_active})")
+      f"(active = {seif_filter.options.active})")
 ekf_pose, seif_pose = filters["ekf"].pose(), seif_filter.pose()
 print(f"final poses differ by {np.linalg.norm(ekf_pose[:2] - seif_pose[:2]):.4f} m")

@@ -297,6 +297,39 @@ void bindPaper(py::module_& m) {
       },
       py::arg("seed"), py::arg("options") = PaperOptions{}, "run_paper_experiment() and its detail: (run, detail).");
 
+  py::class_<PaperRequest>(m, "PaperRequest", "`seif paper` as one call (eval/paper.hpp): runs, seed, jobs, options.")
+      .def(py::init<>())
+      .def_readwrite("runs", &PaperRequest::runs)
+      .def_readwrite("seed", &PaperRequest::seed, "run r uses simulator seed seed + r")
+      .def_readwrite("jobs", &PaperRequest::jobs, "threads; 0: the number of cores (results do not depend on it)")
+      .def_readwrite("options", &PaperRequest::options)
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"runs", "seed", "jobs", "options"}); });
+  py::class_<PaperFailure>(m, "PaperFailure")
+      .def_readonly("seed", &PaperFailure::seed)
+      .def_readonly("error", &PaperFailure::error);
+  py::class_<PaperReport>(m, "PaperReport", "What run_paper() measured; write_paper_results() writes it as `seif paper` does.")
+      .def_readonly("request", &PaperReport::request)
+      .def_readonly("jobs", &PaperReport::jobs)
+      .def_readonly("world", &PaperReport::world)
+      .def_readonly("specs", &PaperReport::specs)
+      .def_readonly("runs", &PaperReport::runs)
+      .def_readonly("failed", &PaperReport::failed)
+      .def_readonly("summaries", &PaperReport::summaries)
+      .def_readonly("typical", &PaperReport::typical, "index into runs of the figures' run")
+      .def("summary_text", &paperSummaryText, "what `seif paper` prints")
+      .def("write", &writePaperResults, py::arg("dir"), py::call_guard<py::gil_scoped_release>(),
+           "writes DIR/results.json, DIR/table.md and DIR/figure_data/ as `seif paper` does");
+  m.def(
+      "run_paper",
+      [](const PaperRequest& request, const py::object& progress) {
+        const auto callback = pythonCallback<std::size_t, std::size_t>(progress);
+        py::gil_scoped_release release;
+        return std::make_unique<PaperReport>(runPaper(request, callback));
+      },
+      py::arg("request"), py::arg("progress") = py::none(),
+      "`seif paper` as one call: request.runs runs of the paper world on worker threads, summarised; "
+      "progress(done, total) counts runs.");
+
   py::class_<FilterSnapshot::Link>(m, "SnapshotLink")
       .def_readonly("a", &FilterSnapshot::Link::a)
       .def_readonly("b", &FilterSnapshot::Link::b)

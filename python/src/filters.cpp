@@ -11,6 +11,8 @@
 
 #include <Eigen/SparseCore>
 
+#include <algorithm>
+
 namespace seif::python {
 namespace {
 
@@ -19,51 +21,40 @@ std::shared_ptr<T> mutableModel(const std::shared_ptr<const T>& p) {
   return std::const_pointer_cast<T>(p);  // models are immutable: no method of theirs changes them
 }
 
-// Lower-case names of SeifOptions' enums, the inverse of SeifOptions::parse*.
-std::string_view meanName(SeifOptions::Mean v) { return v == SeifOptions::Mean::Exact ? "exact" : "amortized"; }
-std::string_view deactivateName(SeifOptions::Deactivate v) {
-  return v == SeifOptions::Deactivate::Oldest ? "oldest" : "weakest";
-}
-std::string_view recoveryName(SeifOptions::Recovery v) {
-  return v == SeifOptions::Recovery::BeforeMeasurement ? "before-update" : "after-update";
-}
-std::string_view relaxOrderName(SeifOptions::RelaxOrder v) {
-  return v == SeifOptions::RelaxOrder::Cyclic ? "cyclic" : "random";
-}
-std::string_view sparsifyName(SeifOptions::Sparsify v) { return v == SeifOptions::Sparsify::Eseif ? "eseif" : "seif"; }
-std::string_view covarianceName(SeifOptions::Covariance v) {
-  return v == SeifOptions::Covariance::Local ? "local" : "exact";
+template <typename E>
+std::string_view nameOf(E v) {
+  return optionName(v);
 }
 
 void bindSeifOptions(py::module_& m) {
   py::class_<SeifOptions> o(m, "SeifOptions",
                             "The SEIF's options (filters/seif_slam.hpp). Enum fields take the enum or its "
                             "name, e.g. options.sparsify = 'eseif'.");
-  bindNamedEnum<SeifOptions::Mean>(o, "Mean", "'amortized' | 'exact'", &SeifOptions::parseMean, &meanName)
+  bindNamedEnum<SeifOptions::Mean>(o, "Mean", "'amortized' | 'exact'", &SeifOptions::parseMean, &nameOf<SeifOptions::Mean>)
       .value("Amortized", SeifOptions::Mean::Amortized)
       .value("Exact", SeifOptions::Mean::Exact);
   bindNamedEnum<SeifOptions::Deactivate>(o, "Deactivate", "'weakest' | 'oldest'", &SeifOptions::parseDeactivate,
-                                         &deactivateName)
+                                         &nameOf<SeifOptions::Deactivate>)
       .value("Weakest", SeifOptions::Deactivate::Weakest)
       .value("Oldest", SeifOptions::Deactivate::Oldest);
   bindNamedEnum<SeifOptions::Recovery>(o, "Recovery", "'before-update' | 'after-update'",
-                                       &SeifOptions::parseRecovery, &recoveryName)
+                                       &SeifOptions::parseRecovery, &nameOf<SeifOptions::Recovery>)
       .value("AfterMeasurement", SeifOptions::Recovery::AfterMeasurement)
       .value("BeforeMeasurement", SeifOptions::Recovery::BeforeMeasurement);
   bindNamedEnum<SeifOptions::RelaxOrder>(o, "RelaxOrder", "'cyclic' | 'random'", &SeifOptions::parseRelaxOrder,
-                                         &relaxOrderName)
+                                         &nameOf<SeifOptions::RelaxOrder>)
       .value("Random", SeifOptions::RelaxOrder::Random)
       .value("Cyclic", SeifOptions::RelaxOrder::Cyclic);
   bindNamedEnum<SeifOptions::Sparsify>(o, "Sparsify", "'seif' | 'eseif'", &SeifOptions::parseSparsify,
-                                       &sparsifyName)
+                                       &nameOf<SeifOptions::Sparsify>)
       .value("Seif", SeifOptions::Sparsify::Seif)
       .value("Eseif", SeifOptions::Sparsify::Eseif);
   bindNamedEnum<SeifOptions::Covariance>(o, "Covariance", "'exact' | 'local'", &SeifOptions::parseCovariance,
-                                         &covarianceName)
+                                         &nameOf<SeifOptions::Covariance>)
       .value("Exact", SeifOptions::Covariance::Exact)
       .value("Local", SeifOptions::Covariance::Local);
   o.def(py::init<>())
-      .def_readwrite("max_active", &SeifOptions::max_active, "theta_x: landmarks linked to the robot after each step")
+      .def_readwrite("active", &SeifOptions::active, "theta_x: landmarks linked to the robot after each step")
       .def_readwrite("relax", &SeifOptions::relax, "K: landmarks relaxed per step besides the robot and the active ones")
       .def_readwrite("mean", &SeifOptions::mean, "amortized (constant time) or exact (sparse Cholesky)")
       .def_readwrite("deactivate", &SeifOptions::deactivate, "weakest (the paper) or oldest")
@@ -72,10 +63,10 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("seed", &SeifOptions::seed, "seed of the random choice of relaxed landmarks")
       .def_readwrite("sparsify", &SeifOptions::sparsify, "seif (the paper's conditioning) or eseif")
       .def_readwrite("covariance", &SeifOptions::covariance, "exact or local marginal covariances")
-      .def_readwrite("eseif_beta", &SeifOptions::eseif_beta, "ESEIF: landmarks whose observations relocalise the robot")
+      .def_readwrite("beta", &SeifOptions::beta, "ESEIF: landmarks whose observations relocalise the robot")
       .def("__repr__", [](py::handle s) {
-        return reprOf(s, {"max_active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "eseif_beta"});
+        return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
+                          "covariance", "beta"});
       });
 }
 
@@ -146,6 +137,33 @@ void bindConfig(py::module_& m) {
   m.def("parse_filter_spec", &parseFilterSpec, py::arg("text"), py::arg("linearization") = Linearization::Standard,
         py::arg("seif") = SeifOptions{},
         "Parses 'name[:key=value,...]' (ekf, eif, seif, batch). Raises InvalidArgument naming what is wrong.");
+  m.def("canonical_filter_spec", &canonicalFilterSpec, py::arg("spec"),
+        "'name:key=value,...' with every option the filter takes: what metrics.json records; parses back "
+        "to an equal spec.");
+  m.def(
+      "filter_options",
+      [] {
+        py::list rows;
+        FilterSpec seif_defaults;
+        seif_defaults.name = "seif";
+        for (const FilterOption& o : filterOptions()) {
+          py::dict row;
+          row["key"] = std::string(o.key);
+          row["attribute"] = [&] {
+            std::string a(o.key);
+            std::replace(a.begin(), a.end(), '-', '_');
+            return a;
+          }();
+          row["filters"] = o.scope == FilterOption::Scope::Seif ? py::make_tuple("seif") : py::make_tuple("ekf", "eif", "seif");
+          row["choices"] = std::string(o.choices);
+          row["default"] = o.get(seif_defaults);
+          row["help"] = std::string(o.help);
+          rows.append(row);
+        }
+        return rows;
+      },
+      "The table of filter options the spec parser, the CLI's flags and metrics.json share: one dict per option "
+      "(key, attribute on SeifOptions / FilterSpec, filters, choices, default, help).");
   m.def("split_filter_list", &splitFilterList, py::arg("list"),
         "Splits 'batch,ekf,seif:sparsify=eseif,beta=4' into specs.");
 }

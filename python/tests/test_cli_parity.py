@@ -1,6 +1,7 @@
 """The same run from Python (run_dataset) and from the CLI (`seif run`) writes the same
 files, and metrics.json holds the same values (timings and the command line aside)."""
 import json
+import pathlib
 
 import numpy as np
 import pytest
@@ -14,9 +15,9 @@ def as_written(values):
     return np.vectorize(lambda v: float(f"{v:.9g}"))(np.asarray(values, dtype=float))
 
 
-# The CLI and the library share --beta = SeifOptions.eseif_beta = 4; the CLI is
+# The CLI and the library share --beta = SeifOptions.beta = 4; the CLI is
 # pinned to the library's default so that both runs use the same options.
-LIBRARY_BETA = ["--beta", str(seif.SeifOptions().eseif_beta)]
+LIBRARY_BETA = ["--beta", str(seif.SeifOptions().beta)]
 
 VOLATILE = {"seconds", "seconds_wall", "seconds_trajectory_and_map", "us_per_step", "us_per_step_median",
             "command_line"}
@@ -85,3 +86,39 @@ def test_victoria_park_isam_python_equals_cli(cli, victoria_park_isam, tmp_path)
     compare_outputs(cli_dir, py_dir)
     assert report.info.format == "isam"
     assert report.landmarks > 0
+
+
+def _without_machine_keys(value):
+    """JSON without what measures the machine or names the invocation (timings, threads)."""
+    machine = ("seconds", "us_per", "jobs", "command_line", "version", "time_definition", "time_unit")
+    if isinstance(value, dict):
+        return {k: _without_machine_keys(v) for k, v in value.items() if not any(m in k for m in machine)}
+    if isinstance(value, list):
+        return [_without_machine_keys(v) for v in value]
+    return value
+
+
+def test_paper_python_equals_cli(cli, tmp_path):
+    """`seif paper` and seif.run_paper + PaperReport.write: the same numbers in every file."""
+    cli_dir, py_dir = tmp_path / "cli", tmp_path / "py"
+    run_cli(cli, "paper", "--runs", 3, "--seed", 5, "--jobs", 2, "--filters", "seif:sparsify=eseif",
+            "--no-figures", "--out", cli_dir)
+    request = seif.PaperRequest()
+    request.runs, request.seed, request.jobs = 3, 5, 1  # results do not depend on the threads
+    request.options.extra = ["seif:sparsify=eseif"]
+    done = []
+    report = seif.run_paper(request, progress=lambda d, t: done.append((d, t)))
+    assert done[-1] == (3, 3)
+    assert [r.seed for r in report.runs] == [5, 6, 7] and not report.failed
+    report.write(str(py_dir))
+    written = sorted(p.relative_to(cli_dir) for p in cli_dir.rglob("*.json"))
+    assert written == sorted(p.relative_to(py_dir) for p in py_dir.rglob("*.json"))
+    assert pathlib.Path("results.json") in written
+    for name in written:
+        cli_json = _without_machine_keys(json.loads((cli_dir / name).read_text()))
+        py_json = _without_machine_keys(json.loads((py_dir / name).read_text()))
+        assert cli_json == py_json, name
+    results = json.loads((py_dir / "results.json").read_text())
+    assert "ekf" in report.summary_text()
+    assert any(f.get("filter_spec") == seif.canonical_filter_spec(seif.parse_filter_spec("seif:sparsify=eseif"))
+               for f in results["filters"])

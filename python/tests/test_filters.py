@@ -128,14 +128,14 @@ def test_filter_accessors_agree(paper_world):
     assert f.rejected_observations() == 0
     assert f.name == "seif"
     assert set(f.active_landmarks()) <= set(f.landmark_ids())
-    assert len(f.active_landmarks()) <= f.options.max_active
+    assert len(f.active_landmarks()) <= f.options.active
 
 
 def test_seif_options_and_config_fields():
     options = seif.SeifOptions()
     options.sparsify = "eseif"
     options.mean = seif.SeifOptions.Mean.Exact
-    options.max_active = 4
+    options.active = 4
     assert options.sparsify == seif.SeifOptions.Sparsify.Eseif
     assert options.sparsify.text == "eseif"
     # A bad name: the enum's constructor raises the library's message; an implicit
@@ -151,5 +151,27 @@ def test_seif_options_and_config_fields():
     assert config.linearization == seif.Linearization.FirstEstimates
     f = seif.make_filter("seif", np.zeros(3), config, options)
     assert isinstance(f, seif.SeifSlam)
-    assert f.options.max_active == 4 and f.options.sparsify.text == "eseif"
+    assert f.options.active == 4 and f.options.sparsify.text == "eseif"
     assert "Cartesian" in f.sensor_model
+
+
+def test_the_option_table_names_every_option_once():
+    """filter_options() is the table the spec parser, the CLI's flags and metrics.json share:
+    each SEIF option is an attribute of SeifOptions, and a canonical spec parses back."""
+    rows = seif.filter_options()
+    assert len({r["key"] for r in rows}) == len(rows)
+    options = seif.SeifOptions()
+    for row in rows:
+        owner = options if row["filters"] == ("seif",) else seif.FilterSpec()
+        assert hasattr(owner, row["attribute"]), row
+        value = getattr(owner, row["attribute"])
+        assert str(getattr(value, "text", value)) == row["default"], row
+        if row["choices"]:
+            for choice in row["choices"].split("|"):
+                spec = seif.parse_filter_spec(f"seif:{row['key']}={choice}")
+                assert seif.parse_filter_spec(seif.canonical_filter_spec(spec)).seif.__repr__() == spec.seif.__repr__()
+    spec = seif.parse_filter_spec("seif:active=4,relax-order=random,seed=3")
+    canonical = seif.canonical_filter_spec(spec)
+    assert canonical.startswith("seif:linearization=standard,") and "relax-order=random" in canonical
+    back = seif.parse_filter_spec(canonical)
+    assert (back.seif.active, back.seif.seed, back.seif.relax_order.text) == (4, 3, "random")

@@ -245,7 +245,8 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
 
 std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOptions& options) {
   nlohmann::json filters = nlohmann::json::array();
-  for (const ConsistencyFilterResult& f : result.filters) {
+  for (std::size_t i = 0; i < result.filters.size(); ++i) {
+    const ConsistencyFilterResult& f = result.filters[i];
     nlohmann::json series = {{"pose", nlohmann::json::array()},
                              {"landmark", nlohmann::json::array()},
                              {"pose_relative", nlohmann::json::array()},
@@ -257,6 +258,8 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
       series["landmark_relative"].push_back(finiteOrNull(p.landmark_relative));
     }
     filters.push_back({{"name", f.name},
+                       // the SEIF's seed is each run's simulator seed
+                       {"filter_spec", i < options.filters.size() ? canonicalFilterSpec(options.filters[i]) : f.name},
                        {"pose_nees_final", finiteOrNull(f.nees_final.pose)},
                        {"landmark_nees_final", finiteOrNull(f.nees_final.landmark)},
                        {"pose_nees_relative_final", finiteOrNull(f.nees_final.pose_relative)},

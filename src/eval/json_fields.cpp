@@ -11,16 +11,20 @@ nlohmann::json toJson(const NoiseModel& n) {
 }
 
 nlohmann::json toJson(const SeifOptions& o) {
-  return {{"active", o.max_active},
-          {"relax", o.relax},
-          {"mean", o.mean == SeifOptions::Mean::Exact ? "exact" : "amortized"},
-          {"deactivate", o.deactivate == SeifOptions::Deactivate::Oldest ? "oldest" : "weakest"},
-          {"recovery", o.recovery == SeifOptions::Recovery::BeforeMeasurement ? "before-update" : "after-update"},
-          {"relax_order", o.relax_order == SeifOptions::RelaxOrder::Cyclic ? "cyclic" : "random"},
-          {"sparsify", o.sparsify == SeifOptions::Sparsify::Eseif ? "eseif" : "seif"},
-          {"beta", o.eseif_beta},
-          {"covariance", o.covariance == SeifOptions::Covariance::Local ? "local" : "exact"},
-          {"seed", o.seed}};
+  FilterSpec spec;
+  spec.name = "seif";
+  spec.seif = o;
+  nlohmann::json j = nlohmann::json::object();
+  for (const FilterOption& option : filterOptions()) {
+    if (option.scope != FilterOption::Scope::Seif) continue;
+    const std::string value = option.get(spec);
+    switch (option.kind) {
+      case FilterOption::Kind::Choice: j[std::string(option.key)] = value; break;
+      case FilterOption::Kind::Integer: j[std::string(option.key)] = std::stoll(value); break;
+      case FilterOption::Kind::Seed: j[std::string(option.key)] = std::stoull(value); break;
+    }
+  }
+  return j;
 }
 
 nlohmann::json toJson(const FilterStats& s) {

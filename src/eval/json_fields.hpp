@@ -2,6 +2,7 @@
 // The JSON form of the settings and statistics the experiments' outputs repeat
 // (metrics.json, results.json, bench.json): one spelling of each key. Private to the library.
 #include "filters/seif_slam.hpp"
+#include <seif/filters/factory.hpp>
 #include <seif/filters/slam_filter.hpp>
 
 #include <nlohmann/json.hpp>

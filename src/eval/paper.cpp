@@ -22,7 +22,7 @@ std::vector<PaperFilterSpec> paperFilters(const PaperOptions& options) {
   specs.push_back(ekf);
 
   SeifOptions seif;
-  seif.max_active = options.active;
+  seif.active = options.active;
   seif.relax = options.relax;
   seif.deactivate = SeifOptions::Deactivate::Weakest;  // the paper's rule
   seif.relax_order = SeifOptions::RelaxOrder::Random;  // the paper: K random landmarks
@@ -42,7 +42,7 @@ std::vector<PaperFilterSpec> paperFilters(const PaperOptions& options) {
   for (int active : options.sweep_active) {
     PaperFilterSpec s = amortized;
     s.name = "seif_active_" + std::to_string(active);
-    s.seif.max_active = active;
+    s.seif.active = active;
     specs.push_back(s);
   }
   for (const std::string& text : options.extra) {

@@ -474,6 +474,7 @@ void writePaperResults(const PaperReport& report, const std::filesystem::path& d
     };
     if (spec.spec) {
       j["spec"] = spec.spec->text;
+      j["filter_spec"] = canonicalFilterSpec(*spec.spec);
     } else if (spec.ekf) {
       j["mean_rule"] = "ekf";
       j["runs_all_landmarks_mapped"] = t.all_mapped;

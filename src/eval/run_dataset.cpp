@@ -76,8 +76,10 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"dropped", dropped},
   };
   if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
-  // The SEIF options the filter ran with: the flags' as the spec's own options override them.
+  // The configuration the filter ran with: the flags' as the spec's own options override
+  // them, written as a spec that parses back to it.
   const FilterSpec spec = parseFilterSpec(r.filter, Linearization::Standard, request.seif);
+  j["filter_spec"] = canonicalFilterSpec(spec);
   if (spec.name == "seif") j["seif"] = toJson(spec.seif);
   return j.dump(2) + "\n";
 }

@@ -67,7 +67,7 @@ FilterConfig readConfig(ArchiveReader& in) {
 
 void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.section("seif-options");
-  out.i64(o.max_active);
+  out.i64(o.active);
   out.i64(o.relax);
   out.u64(static_cast<std::uint64_t>(o.mean));
   out.u64(static_cast<std::uint64_t>(o.deactivate));
@@ -76,14 +76,14 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.u64(o.seed);
   out.u64(static_cast<std::uint64_t>(o.sparsify));
   out.u64(static_cast<std::uint64_t>(o.covariance));
-  out.i64(o.eseif_beta);
+  out.i64(o.beta);
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
   in.section("seif-options");
   constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
   SeifOptions o;
-  o.max_active = static_cast<int>(in.i64In("max active", 1, kMaxLocalLandmarks - 1));
+  o.active = static_cast<int>(in.i64In("active", 1, kMaxLocalLandmarks - 1));
   o.relax = static_cast<int>(in.i64In("relax", 0, kIntMax));
   o.mean = static_cast<SeifOptions::Mean>(in.u64Max("mean", 1));
   o.deactivate = static_cast<SeifOptions::Deactivate>(in.u64Max("deactivate", 1));
@@ -92,7 +92,7 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   o.seed = in.u64("seed");
   o.sparsify = static_cast<SeifOptions::Sparsify>(in.u64Max("sparsify", 1));
   o.covariance = static_cast<SeifOptions::Covariance>(in.u64Max("covariance", 1));
-  o.eseif_beta = static_cast<int>(in.i64In("eseif beta", 2, kIntMax));
+  o.beta = static_cast<int>(in.i64In("beta", 2, kIntMax));
   return o;
 }
 

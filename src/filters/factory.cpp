@@ -5,8 +5,12 @@
 #include "filters/ekf_slam.hpp"
 #include <seif/filters/factory.hpp>
 
+#include "filters/information_ops.hpp"
+
+#include <algorithm>
+#include <array>
 #include <charconv>
-#include <stdexcept>
+#include <limits>
 #include <string>
 
 namespace seif {
@@ -17,25 +21,115 @@ namespace {
   throw InvalidArgument("filter '" + std::string(text) + "': " + what);
 }
 
-int parseInt(std::string_view text, std::string_view key, std::string_view value) {
-  int v = 0;
+std::int64_t parseInteger(std::string_view key, std::string_view value, std::int64_t lo, std::int64_t hi) {
+  std::int64_t v = 0;
   const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
   if (ec != std::errc() || end != value.data() + value.size()) {
-    badSpec(text, std::string(key) + "=" + std::string(value) + " is not an integer");
+    throw InvalidArgument(std::string(key) + "=" + std::string(value) + " is not an integer");
+  }
+  if (v < lo || v > hi) {
+    throw InvalidArgument(std::string(key) + "=" + std::string(value) + " is outside [" + std::to_string(lo) + ", " +
+                          std::to_string(hi) + "]");
   }
   return v;
 }
 
-std::uint64_t parseSeed(std::string_view text, std::string_view value) {
+std::uint64_t parseSeed(std::string_view value) {
   std::uint64_t v = 0;
   const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
   if (ec != std::errc() || end != value.data() + value.size()) {
-    badSpec(text, "seed=" + std::string(value) + " is not an integer in [0, 2^64 - 1]");
+    throw InvalidArgument("seed=" + std::string(value) + " is not an integer in [0, 2^64 - 1]");
   }
   return v;
 }
 
+using Opt = FilterOption;
+constexpr auto kAll = Opt::Scope::AllButBatch;
+constexpr auto kSeif = Opt::Scope::Seif;
+constexpr auto kChoice = Opt::Kind::Choice;
+constexpr auto kInteger = Opt::Kind::Integer;
+constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
+
+// The SEIF's documentation of each option is SeifOptions' (seif_options.hpp); the help
+// here is the one line a flag or a spec error shows.
+const std::array<FilterOption, 11> kOptions = {{
+    {"linearization", kAll, kChoice, "standard|fej", 0, 0,
+     "where Jacobians are evaluated: the newest estimates or the first ones (FEJ)",
+     [](FilterSpec& s, std::string_view v) { s.linearization = parseLinearization(v); },
+     [](const FilterSpec& s) { return std::string(linearizationName(s.linearization)); }},
+    {"sparsify", kSeif, kChoice, "seif|eseif", 0, 0,
+     "how the robot's links are kept at `active`: the paper's conditioning (seif) or the ESEIF's "
+     "relocalisation from `beta` observations (eseif: nothing conditioned away)",
+     [](FilterSpec& s, std::string_view v) { s.seif.sparsify = SeifOptions::parseSparsify(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.seif.sparsify)); }},
+    {"active", kSeif, kInteger, "", 1, kMaxLocalLandmarks - 1,
+     "theta_x: landmarks kept linked to the robot (the paper: 6)",
+     [](FilterSpec& s, std::string_view v) {
+       s.seif.active = static_cast<int>(parseInteger("active", v, 1, kMaxLocalLandmarks - 1));
+     },
+     [](const FilterSpec& s) { return std::to_string(s.seif.active); }},
+    {"beta", kSeif, kInteger, "", 2, kMaxLocalLandmarks - 1,
+     "ESEIF: landmarks whose observations relocalise the robot",
+     [](FilterSpec& s, std::string_view v) {
+       s.seif.beta = static_cast<int>(parseInteger("beta", v, 2, kMaxLocalLandmarks - 1));
+     },
+     [](const FilterSpec& s) { return std::to_string(s.seif.beta); }},
+    {"relax", kSeif, kInteger, "", 0, kIntMax,
+     "K: landmarks relaxed per step besides the robot and the active ones (capped at the map size)",
+     [](FilterSpec& s, std::string_view v) { s.seif.relax = static_cast<int>(parseInteger("relax", v, 0, kIntMax)); },
+     [](const FilterSpec& s) { return std::to_string(s.seif.relax); }},
+    {"mean", kSeif, kChoice, "amortized|exact", 0, 0,
+     "mean recovery: amortized (constant time) or exact (a sparse Cholesky solve each step)",
+     [](FilterSpec& s, std::string_view v) { s.seif.mean = SeifOptions::parseMean(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.seif.mean)); }},
+    {"deactivate", kSeif, kChoice, "weakest|oldest", 0, 0,
+     "which landmarks the sparsification deactivates: the weakest-linked or the oldest-seen",
+     [](FilterSpec& s, std::string_view v) { s.seif.deactivate = SeifOptions::parseDeactivate(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.seif.deactivate)); }},
+    {"recovery", kSeif, kChoice, "after-update|before-update", 0, 0,
+     "relax the amortized mean before the measurement update (the book's order) or after it",
+     [](FilterSpec& s, std::string_view v) { s.seif.recovery = SeifOptions::parseRecovery(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.seif.recovery)); }},
+    {"relax-order", kSeif, kChoice, "random|cyclic", 0, 0,
+     "which K landmarks each step relaxes: the next in map order (cyclic) or drawn at random (the paper)",
+     [](FilterSpec& s, std::string_view v) { s.seif.relax_order = SeifOptions::parseRelaxOrder(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.seif.relax_order)); }},
+    {"covariance", kSeif, kChoice, "exact|local", 0, 0,
+     "how poseCovariance() and landmarkCovariance() are recovered: exact (one sparse factorisation "
+     "per changed H) or local (the Markov blanket's, constant time, for display)",
+     [](FilterSpec& s, std::string_view v) { s.seif.covariance = SeifOptions::parseCovariance(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.seif.covariance)); }},
+    {"seed", kSeif, Opt::Kind::Seed, "", 0, 0, "seed of the random choice of relaxed landmarks",
+     [](FilterSpec& s, std::string_view v) { s.seif.seed = parseSeed(v); },
+     [](const FilterSpec& s) { return std::to_string(s.seif.seed); }},
+}};
+
+bool knownFilter(std::string_view name) {
+  return name == "ekf" || name == "eif" || name == "seif" || name == "batch";
+}
+
 }  // namespace
+
+std::span<const FilterOption> filterOptions() { return kOptions; }
+
+bool takesOption(std::string_view name, const FilterOption& option) {
+  switch (option.scope) {
+    case FilterOption::Scope::AllButBatch: return knownFilter(name) && name != "batch";
+    case FilterOption::Scope::Seif: return name == "seif";
+  }
+  return false;
+}
+
+std::string canonicalFilterSpec(const FilterSpec& spec) {
+  std::string out = spec.name;
+  char sep = ':';
+  for (const FilterOption& o : kOptions) {
+    if (!takesOption(spec.name, o)) continue;
+    out.append(1, sep).append(o.key).append("=").append(o.get(spec));
+    sep = ',';
+  }
+  return out;
+}
 
 FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, const SeifOptions& seif) {
   FilterSpec spec;
@@ -44,7 +138,7 @@ FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, c
   spec.seif = seif;
   const std::size_t colon = text.find(':');
   spec.name = std::string(text.substr(0, colon));
-  if (spec.name != "ekf" && spec.name != "eif" && spec.name != "seif" && spec.name != "batch") {
+  if (!knownFilter(spec.name)) {
     badSpec(text, "unknown filter '" + spec.name + "' (expected ekf, eif, seif or batch)");
   }
   if (colon == std::string_view::npos) return spec;
@@ -56,36 +150,27 @@ FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, c
     rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
     const std::size_t eq = item.find('=');
     if (eq == std::string_view::npos || eq == 0 || eq + 1 == item.size()) {
-      badSpec(text, "'" + std::string(item) + "' is not key=value");
+      std::string what = "'";  // built by appends: GCC 12's -Wrestrict misfires on "lit" + string&&
+      badSpec(text, what.append(item).append("' is not key=value"));
     }
     const std::string_view key = item.substr(0, eq);
     const std::string_view value = item.substr(eq + 1);
+    const auto option = std::find_if(kOptions.begin(), kOptions.end(), [&](const FilterOption& o) { return o.key == key; });
+    if (option == kOptions.end() || !takesOption(spec.name, *option)) {
+      if (spec.name == "batch" && key == "linearization") {
+        badSpec(text, "the batch MAP relinearises at every iteration; it takes no linearization");
+      }
+      std::string takes;
+      for (const FilterOption& o : kOptions) {
+        if (takesOption(spec.name, o)) takes.append(takes.empty() ? "" : ", ").append(o.key);
+      }
+      badSpec(text, "unknown option '" + std::string(key) + "' for " + spec.name +
+                        (takes.empty() ? " (it takes none)" : " (it takes " + takes + ")"));
+    }
     try {
-      if (key == "linearization") {
-        if (spec.name == "batch") badSpec(text, "the batch MAP relinearises at every iteration; it takes no linearization");
-        spec.linearization = parseLinearization(value);
-        continue;
-      }
-      if (spec.name != "seif") badSpec(text, "unknown option '" + std::string(key) + "' for " + spec.name);
-      if (key == "sparsify") spec.seif.sparsify = SeifOptions::parseSparsify(value);
-      else if (key == "active") spec.seif.max_active = parseInt(text, key, value);
-      else if (key == "beta") spec.seif.eseif_beta = parseInt(text, key, value);
-      else if (key == "relax") spec.seif.relax = parseInt(text, key, value);
-      else if (key == "mean") spec.seif.mean = SeifOptions::parseMean(value);
-      else if (key == "deactivate") spec.seif.deactivate = SeifOptions::parseDeactivate(value);
-      else if (key == "recovery") spec.seif.recovery = SeifOptions::parseRecovery(value);
-      else if (key == "relax-order") spec.seif.relax_order = SeifOptions::parseRelaxOrder(value);
-      else if (key == "covariance") spec.seif.covariance = SeifOptions::parseCovariance(value);
-      else if (key == "seed") spec.seif.seed = parseSeed(text, value);
-      else {
-        badSpec(text, "unknown option '" + std::string(key) +
-                          "' (seif takes linearization, sparsify, beta, active, relax, mean, deactivate, "
-                          "recovery, relax-order, covariance, seed)");
-      }
+      option->set(spec, value);
     } catch (const InvalidArgument& e) {
-      const std::string what = e.what();
-      if (what.rfind("filter '", 0) == 0) throw;
-      badSpec(text, what);
+      badSpec(text, e.what());
     }
   }
   return spec;

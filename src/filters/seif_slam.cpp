@@ -12,46 +12,6 @@
 namespace seif {
 
 
-SeifOptions::Mean SeifOptions::parseMean(std::string_view s) {
-  if (s == "amortized") return Mean::Amortized;
-  if (s == "exact") return Mean::Exact;
-  throw InvalidArgument("unknown mean recovery '" + std::string(s) +
-                              "' (expected amortized or exact)");
-}
-
-SeifOptions::Deactivate SeifOptions::parseDeactivate(std::string_view s) {
-  if (s == "weakest") return Deactivate::Weakest;
-  if (s == "oldest") return Deactivate::Oldest;
-  throw InvalidArgument("unknown deactivation rule '" + std::string(s) +
-                              "' (expected weakest or oldest)");
-}
-
-SeifOptions::Recovery SeifOptions::parseRecovery(std::string_view s) {
-  if (s == "after-update") return Recovery::AfterMeasurement;
-  if (s == "before-update") return Recovery::BeforeMeasurement;
-  throw InvalidArgument("unknown recovery point '" + std::string(s) +
-                              "' (expected after-update or before-update)");
-}
-
-SeifOptions::RelaxOrder SeifOptions::parseRelaxOrder(std::string_view s) {
-  if (s == "random") return RelaxOrder::Random;
-  if (s == "cyclic") return RelaxOrder::Cyclic;
-  throw InvalidArgument("unknown relaxation order '" + std::string(s) +
-                              "' (expected random or cyclic)");
-}
-
-SeifOptions::Sparsify SeifOptions::parseSparsify(std::string_view s) {
-  if (s == "seif") return Sparsify::Seif;
-  if (s == "eseif") return Sparsify::Eseif;
-  throw InvalidArgument("unknown sparsification '" + std::string(s) + "' (expected seif or eseif)");
-}
-
-SeifOptions::Covariance SeifOptions::parseCovariance(std::string_view s) {
-  if (s == "exact") return Covariance::Exact;
-  if (s == "local") return Covariance::Local;
-  throw InvalidArgument("unknown covariance recovery '" + std::string(s) + "' (expected exact or local)");
-}
-
 SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const SeifOptions& options)
     : SlamFilter(config),
       config_(config),
@@ -59,18 +19,18 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
       options_(options),
       store_(config.initial_pose_sigma.cwiseAbs2().cwiseInverse().asDiagonal(), initial_pose),
       rng_(options.seed) {
-  if (options.max_active < 1 || options.max_active >= kMaxLocalLandmarks) {
+  if (options.active < 1 || options.active >= kMaxLocalLandmarks) {
     throw InvalidArgument("seif: the number of active landmarks must be in 1.." +
                                 std::to_string(kMaxLocalLandmarks - 1));
   }
   if (options.relax < 0) throw InvalidArgument("seif: --relax must be >= 0");
-  if (options.eseif_beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
+  if (options.beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
   order_.reserve(kMaxLocalLandmarks + 1);
   ranking_.reserve(kMaxLocalLandmarks + 1);
   if (options.sparsify == SeifOptions::Sparsify::Eseif) {
     alpha_.reserve(kMaxLocalLandmarks + 1);
-    beta_.reserve(static_cast<std::size_t>(options.max_active));
-    beta_slots_.reserve(static_cast<std::size_t>(options.max_active));
+    beta_.reserve(static_cast<std::size_t>(options.active));
+    beta_slots_.reserve(static_cast<std::size_t>(options.active));
     roles_.reserve(kMaxLocalLandmarks + 1);
   }
 }

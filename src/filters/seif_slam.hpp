@@ -6,7 +6,7 @@
 //   predict(u)  : motion update on the {robot, active} block (paper Lemma 3);
 //   update(z)   : mean recovery (amortised coordinate descent, eq. 42), measurement update
 //                 (Lemma 1, eq. 21-22), sparsification (eq. 44-51) when more than
-//                 max_active landmarks are active.
+//                 landmarks are active (options.active, the paper's theta_x).
 #include "filters/landmark_book.hpp"
 #include <seif/filters/seif_options.hpp>
 #include "filters/information_ops.hpp"
@@ -82,7 +82,7 @@ class SeifSlam final : public SlamFilter {
   // Sparsify::Eseif counters, over the filter's life.
   /// Steps whose robot was marginalised out and relocalised from z_beta.
   std::size_t eseifRelocalizations() const { return eseif_relocalizations_; }
-  /// Steps that left more than max_active landmarks active: no usable z_beta.
+  /// Steps that left more than options.active landmarks active: no usable z_beta.
   std::size_t eseifDeferrals() const { return eseif_deferrals_; }
   /// SEIF conditioning sparsifications (eq. 44-51) under Eseif: the active set reached
   /// kMaxLocalLandmarks while deferred, or within one batch.
@@ -114,7 +114,7 @@ class SeifSlam final : public SlamFilter {
   void deactivateSurplus(bool solve_active_mean_first);
   /// update() with Sparsify::Eseif (Walter, Eustice, Leonard 2007).
   void eseifUpdate(std::span<const Observation> z, const MeasurementModel& sensor);
-  /// Whether z would leave more than max_active landmarks active.
+  /// Whether z would leave more than options.active landmarks active.
   bool exceedsActive(std::span<const Observation> z) const;
   /// Splits z into z_alpha (alpha_, gross outliers dropped) and z_beta (beta_): the fewest
   /// observations of mapped landmarks, best informed first, whose stacked pose Jacobian

@@ -26,7 +26,7 @@ bool wellConditioned(const Mat3& A) {
 // ---------------------------------------------------------------- ESEIF ---------------
 
 void SeifSlam::eseifUpdate(std::span<const Observation> z, const MeasurementModel& sensor) {
-  // Walter, Eustice, Leonard 2007: when z would activate more than max_active landmarks,
+  // Walter, Eustice, Leonard 2007: when z would activate more than options.active landmarks,
   // z_alpha updates the filter (eq. 21-22), the robot is marginalised out and relocalised
   // from z_beta alone. H stays exactly sparse; information is dropped, never invented.
   const bool triggered = exceedsActive(z);
@@ -48,7 +48,7 @@ void SeifSlam::eseifUpdate(std::span<const Observation> z, const MeasurementMode
   }
   // Without a relocalisation the surplus stays active until one is possible (measurementUpdate()
   // conditions it away, counted in eseifFallbacks(), only when the local block is full).
-  if (static_cast<int>(store_.robotLinks().size()) > options_.max_active) ++eseif_deferrals_;
+  if (static_cast<int>(store_.robotLinks().size()) > options_.active) ++eseif_deferrals_;
 }
 
 bool SeifSlam::exceedsActive(std::span<const Observation> z) const {
@@ -60,13 +60,13 @@ bool SeifSlam::exceedsActive(std::span<const Observation> z) const {
                                       [&](const Observation& o) { return o.landmark == z[i].landmark; });
     if (!repeated) ++active;
   }
-  return active > options_.max_active;
+  return active > options_.active;
 }
 
 bool SeifSlam::partitionObservations(std::span<const Observation> z, const MeasurementModel& sensor) {
   // Candidates for z_beta: observations of mapped landmarks, the best informed (largest
-  // trace of H_ll) first. z_beta takes eseif_beta of them, or more until their stacked
-  // sum J_x^T R^-1 J_x fixes all three pose dof, well conditioned; at most max_active, so
+  // trace of H_ll) first. z_beta takes beta of them, or more until their stacked
+  // sum J_x^T R^-1 J_x fixes all three pose dof, well conditioned; at most options.active, so
   // that the relocalised robot's active set is within bounds.
   alpha_.clear();
   beta_.clear();
@@ -78,8 +78,8 @@ bool SeifSlam::partitionObservations(std::span<const Observation> z, const Measu
     if (slot >= 0) ranking_.emplace_back(-store_.node(slot).H.trace(), static_cast<int>(i));
   }
   std::sort(ranking_.begin(), ranking_.end());
-  const auto max_beta = static_cast<std::size_t>(options_.max_active);
-  const auto target = std::min(static_cast<std::size_t>(options_.eseif_beta), max_beta);
+  const auto max_beta = static_cast<std::size_t>(options_.active);
+  const auto target = std::min(static_cast<std::size_t>(options_.beta), max_beta);
   const Pose2 x = store_.robotMean();
   Mat3 A = Mat3::Zero();
   bool found = false;

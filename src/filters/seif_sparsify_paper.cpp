@@ -12,7 +12,7 @@ void SeifSlam::sparsify() { deactivateSurplus(false); }
 void SeifSlam::deactivateSurplus(bool solve_active_mean_first) {
   // §4, paper eq. (44-51): deactivate the surplus Y0, keep Y+.
   const int k = static_cast<int>(store_.robotLinks().size());
-  const int drop = k - options_.max_active;
+  const int drop = k - options_.active;
   if (drop <= 0) return;
   if (options_.sparsify == SeifOptions::Sparsify::Eseif) ++eseif_fallbacks_;
   ranking_.clear();

@@ -4,7 +4,9 @@
 #include <seif/filters/seif_options.hpp>
 #include <seif/filters/slam_filter.hpp>
 
+#include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,11 +21,39 @@ struct FilterSpec {
   SeifOptions seif;
 };
 
-/// Parses "name[:key=value,...]". Keys: linearization=standard|fej (every filter but the
-/// batch); for the SEIF sparsify=seif|eseif, beta=B (eseif), active=N, relax=K, mean=amortized|exact,
-/// deactivate=weakest|oldest, recovery=before-update|after-update, relax-order=cyclic|random,
-/// covariance=exact|local, seed=S. Unset keys keep `linearization` and `seif`. Throws InvalidArgument naming
-/// the spec and what is wrong (unknown name, key or value; a key the filter does not take).
+/// One option of the filters. The table of them (filterOptions()) is the single description
+/// the spec parser, the CLI's flags (`--<key>`), metrics.json ("filter_spec" and the "seif"
+/// object) and Python's names (the key with '_' for '-') all come from.
+struct FilterOption {
+  enum class Scope { AllButBatch, Seif };  ///< which filters take it
+  enum class Kind { Choice, Integer, Seed };
+  std::string_view key;      ///< e.g. "relax-order"
+  Scope scope;
+  Kind kind;
+  std::string_view choices;  ///< Choice: the values, "cyclic|random"
+  std::int64_t min = 0;      ///< Integer: the range
+  std::int64_t max = 0;
+  std::string_view help;
+  /// Sets the option in a spec from its text; throws InvalidArgument naming key and value.
+  void (*set)(FilterSpec& spec, std::string_view value);
+  /// The option's value in a spec, as text set() takes.
+  std::string (*get)(const FilterSpec& spec);
+};
+
+/// Every filter option, in the order the canonical spec lists them.
+std::span<const FilterOption> filterOptions();
+
+/// Whether filter `name` (ekf | eif | seif | batch) takes the option.
+bool takesOption(std::string_view name, const FilterOption& option);
+
+/// "name:key=value,..." with every option the filter takes, in table order: the exact
+/// configuration a spec ran with, as metrics.json records it; parses back to an equal spec.
+std::string canonicalFilterSpec(const FilterSpec& spec);
+
+/// Parses "name[:key=value,...]" with the keys of filterOptions() (linearization for every
+/// filter but the batch; the SEIF's options for the SEIF). Unset keys keep `linearization`
+/// and `seif`. Throws InvalidArgument naming the spec and what is wrong (unknown name, key
+/// or value, a value out of range, a key the filter does not take).
 FilterSpec parseFilterSpec(std::string_view text, Linearization linearization = Linearization::Standard,
                            const SeifOptions& seif = {});
 

@@ -14,7 +14,7 @@ struct SeifOptions {
   enum class Sparsify { Seif, Eseif };
   enum class Covariance { Exact, Local };
 
-  int max_active = 6;  ///< theta_x: landmarks linked to the robot after each step
+  int active = 6;  ///< theta_x (the paper's name): landmarks linked to the robot after each step
   int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
                        ///< (at most every landmark once: K is capped at the map size)
   /// Amortized: constant-time coordinate descent. Exact: sparse Cholesky solve of H mu = b
@@ -34,7 +34,7 @@ struct SeifOptions {
   /// paper` uses it). Equally accurate on the paper's world; docs/seif.md has the numbers.
   RelaxOrder relax_order = RelaxOrder::Cyclic;
   std::uint64_t seed = 1;  ///< for the random choice of relaxed landmarks
-  /// How the robot's links are kept at max_active: Seif conditions the surplus away (paper
+  /// How the robot's links are kept at `active`: Seif conditions the surplus away (paper
   /// eq. 44-51; overconfident, Eustice et al. 2005). Eseif marginalises the robot out and
   /// relocalises it from part of the current measurements (Walter, Eustice, Leonard 2007):
   /// H stays exactly sparse and nothing is conditioned away.
@@ -49,9 +49,9 @@ struct SeifOptions {
   /// Eseif: how many landmarks' observations relocalise the robot (z_beta), best informed
   /// first, when the step has that many: >= 2 (a 2-D point sensor's least for the 3-dof
   /// pose); fewer when the step has fewer (but 2), more while the pose is ill-conditioned,
-  /// never more than max_active. More give a better relocalised pose (docs: the paper's
+  /// never more than `active`. More give a better relocalised pose (docs: the paper's
   /// world's map error is several times smaller with 4 than with 2).
-  int eseif_beta = 4;
+  int beta = 4;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
@@ -60,5 +60,13 @@ struct SeifOptions {
   static Sparsify parseSparsify(std::string_view s);      ///< "seif" | "eseif"
   static Covariance parseCovariance(std::string_view s);  ///< "exact" | "local"
 };
+
+/// The name parse*() takes for each value, as specs, flags and metrics.json spell it.
+std::string_view optionName(SeifOptions::Mean v);
+std::string_view optionName(SeifOptions::Deactivate v);
+std::string_view optionName(SeifOptions::Recovery v);
+std::string_view optionName(SeifOptions::RelaxOrder v);
+std::string_view optionName(SeifOptions::Sparsify v);
+std::string_view optionName(SeifOptions::Covariance v);
 
 }  // namespace seif

@@ -1,0 +1,149 @@
+// The filter option table (filters/factory.hpp): the spec parser, the CLI's flags and
+// metrics.json all come from it, and the configuration metrics.json records parses back to
+// the filter that ran.
+#include "cli_support.hpp"
+
+#include <seif/core/errors.hpp>
+#include <seif/filters/factory.hpp>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using seif::FilterOption;
+using seif::FilterSpec;
+
+/// Every value the test tries for an option: each choice, or the ends and middle of its range.
+std::vector<std::string> valuesOf(const FilterOption& o) {
+  std::vector<std::string> out;
+  switch (o.kind) {
+    case FilterOption::Kind::Choice:
+      for (std::string_view rest = o.choices; !rest.empty();) {
+        const std::size_t bar = rest.find('|');
+        out.emplace_back(rest.substr(0, bar));
+        rest = bar == std::string_view::npos ? std::string_view() : rest.substr(bar + 1);
+      }
+      break;
+    case FilterOption::Kind::Integer:
+      out = {std::to_string(o.min), std::to_string(o.max), std::to_string(o.min + (o.max - o.min) / 2)};
+      break;
+    case FilterOption::Kind::Seed: out = {"0", "18446744073709551615", "12345"}; break;
+  }
+  return out;
+}
+
+/// Every option's value in a spec: two specs with the same are the same configuration.
+std::vector<std::string> allValues(const FilterSpec& s) {
+  std::vector<std::string> v = {s.name};
+  for (const FilterOption& o : seif::filterOptions()) v.push_back(o.get(s));
+  return v;
+}
+
+TEST(FilterOptions, KeysAreUniqueAndEveryValueRoundTrips) {
+  std::vector<std::string> keys;
+  for (const FilterOption& o : seif::filterOptions()) {
+    for (const std::string& k : keys) EXPECT_NE(k, o.key);
+    keys.emplace_back(o.key);
+    EXPECT_FALSE(o.help.empty()) << o.key;
+    for (const std::string& value : valuesOf(o)) {
+      const std::string text = "seif:" + std::string(o.key) + "=" + value;
+      const FilterSpec s = seif::parseFilterSpec(text);
+      EXPECT_EQ(o.get(s), value) << text;
+      EXPECT_EQ(allValues(seif::parseFilterSpec(seif::canonicalFilterSpec(s))), allValues(s)) << text;
+    }
+  }
+}
+
+TEST(FilterOptions, TheCanonicalSpecParsesBackToTheSameFilter) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 200; ++trial) {
+    const char* names[] = {"ekf", "eif", "seif", "batch"};
+    std::string text = names[trial % 4];
+    char sep = ':';
+    for (const FilterOption& o : seif::filterOptions()) {
+      if (!seif::takesOption(text.substr(0, text.find(':')), o) || rng() % 2 == 0) continue;
+      const std::vector<std::string> values = valuesOf(o);
+      text.append(1, sep).append(o.key).append("=").append(values[rng() % values.size()]);
+      sep = ',';
+    }
+    const FilterSpec s = seif::parseFilterSpec(text);
+    const std::string canonical = seif::canonicalFilterSpec(s);
+    const FilterSpec back = seif::parseFilterSpec(canonical);
+    EXPECT_EQ(allValues(back), allValues(s)) << text << " -> " << canonical;
+    EXPECT_EQ(seif::canonicalFilterSpec(back), canonical);
+    // The canonical spec names every option the filter takes, and no other.
+    for (const FilterOption& o : seif::filterOptions()) {
+      EXPECT_EQ(canonical.find(std::string(o.key) + "=") != std::string::npos, seif::takesOption(s.name, o))
+          << canonical << " / " << o.key;
+    }
+  }
+  EXPECT_EQ(seif::canonicalFilterSpec(seif::parseFilterSpec("batch")), "batch");
+}
+
+TEST(FilterOptions, BadValuesAndForeignKeysAreRefusedByName) {
+  for (const char* bad : {"seif:active=0", "seif:active=40", "seif:beta=1", "seif:relax=-1", "seif:seed=-1",
+                          "seif:seed=18446744073709551616", "seif:mean=fast", "seif:active=4.5", "ekf:active=4",
+                          "batch:linearization=fej", "eif:beta=3", "seif:colour=red"}) {
+    try {
+      seif::parseFilterSpec(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const seif::InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+  try {
+    seif::parseFilterSpec("ekf:sparsify=eseif");
+  } catch (const seif::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("it takes linearization"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FilterOptions, EverySeifOptionIsACliFlagWithTheLibraryDefault) {
+  const auto help = seif::test::runCli("run --help");
+  ASSERT_EQ(help.status, 0) << help.err;
+  FilterSpec defaults;
+  defaults.name = "seif";
+  for (const FilterOption& o : seif::filterOptions()) {
+    if (o.scope != FilterOption::Scope::Seif) continue;
+    const std::string flag = "--" + std::string(o.key);
+    const std::size_t at = help.out.find(flag + " ");
+    ASSERT_NE(at, std::string::npos) << flag << " missing from `seif run --help`";
+    const std::string line = help.out.substr(at, help.out.find('\n', at) - at);
+    EXPECT_NE(line.find(o.get(defaults)), std::string::npos) << line;
+  }
+}
+
+TEST(FilterOptions, MetricsJsonRecordsASpecThatReproducesTheRun) {
+  const auto dir = seif::test::scratchDir("filter_options_cli");
+  ASSERT_EQ(seif::test::runCli("simulate --preset paper --steps 120 --seed 4 --out " + (dir / "W").string()).status, 0);
+  // Flags and the spec's own keys together: the spec's win.
+  const auto first = seif::test::runCli("run --dataset " + (dir / "W").string() +
+                                        " --active 4 --relax 3 --relax-order random --seed 9 "
+                                        "--filter seif:relax=5,sparsify=eseif,beta=3 --out " + (dir / "a").string());
+  ASSERT_EQ(first.status, 0) << first.err;
+  const auto metrics = nlohmann::json::parse(seif::test::slurp(dir / "a" / "metrics.json"));
+  const std::string spec = metrics.at("filter_spec");
+  const FilterSpec s = seif::parseFilterSpec(spec);
+  EXPECT_EQ(s.seif.active, 4);
+  EXPECT_EQ(s.seif.relax, 5);
+  EXPECT_EQ(s.seif.beta, 3);
+  EXPECT_EQ(s.seif.seed, 9u);
+  EXPECT_EQ(s.seif.sparsify, seif::SeifOptions::Sparsify::Eseif);
+  EXPECT_EQ(s.seif.relax_order, seif::SeifOptions::RelaxOrder::Random);
+  EXPECT_EQ(metrics.at("seif").at("relax-order"), "random");
+  // The recorded spec alone, with no flags, runs the same filter: the same numbers.
+  const auto again = seif::test::runCli("run --dataset " + (dir / "W").string() + " --filter " + spec + " --out " +
+                                        (dir / "b").string());
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_EQ(seif::test::slurp(dir / "a" / "map.csv"), seif::test::slurp(dir / "b" / "map.csv"));
+  EXPECT_EQ(seif::test::slurp(dir / "a" / "trajectory.tum"), seif::test::slurp(dir / "b" / "trajectory.tum"));
+  const auto metrics_b = nlohmann::json::parse(seif::test::slurp(dir / "b" / "metrics.json"));
+  EXPECT_EQ(metrics_b.at("filter_spec"), spec);
+}
+
+}  // namespace
