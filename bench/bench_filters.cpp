@@ -69,8 +69,7 @@ void makeBatches(Prepared& p, const std::vector<int>& ids) {
 }
 
 Prepared prepareDense(const std::string& name, int n) {
-  FilterConfig config;
-  config.noise = paperNoise();
+  FilterConfig config = paperFilterConfig(paperNoise());
   const Pose2 start(0.0, 0.0, 0.0);
   Prepared p;
   p.filter = makeFilter(name, start, config);
@@ -90,8 +89,7 @@ Prepared prepareDense(const std::string& name, int n) {
 Prepared prepareSeif(int n) {
   const WorldConfig world = presetConfig(WorldPreset::Corridor, n, 0, 1);
   const Dataset data = buildDataset(simulate(world));
-  FilterConfig config;
-  config.noise = world.noise;
+  FilterConfig config = paperFilterConfig(world.noise);
   Prepared p;
   p.filter = makeFilter("seif", startPose(data), config);
   for (const Step& step : data.steps) p.filter->step(step.u, step.observations);

@@ -22,8 +22,7 @@ struct Scenario {
 /// `noise_scale` multiplies every noise sigma (smaller: a more nearly linear problem).
 /// A filter config with the scenario's noise (the paper's default models).
 inline FilterConfig configFor(const Scenario& s) {
-  FilterConfig c;
-  c.noise = s.noise;
+  FilterConfig c = paperFilterConfig(s.noise);
   return c;
 }
 

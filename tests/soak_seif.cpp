@@ -44,8 +44,8 @@ TEST(Soak, AMillionSeifStepsOnAFixedMap) {
     const double r = radius(rng), a = angle(rng);
     landmarks.emplace_back(r * std::cos(a), r * std::sin(a));
   }
-  FilterConfig config;
-  config.noise = {0.02, 0.01, 0.02, 0.01};
+  const NoiseModel noise{0.02, 0.01, 0.02, 0.01};
+  const FilterConfig config = paperFilterConfig(noise);
   const VelocityControl u{1.0, 0.2, 0.1};
   Pose2 truth(5.0, 0.0, std::numbers::pi / 2);
   SeifSlam seif(truth, config);
@@ -54,14 +54,14 @@ TEST(Soak, AMillionSeifStepsOnAFixedMap) {
   double worst_position_error = 0.0;
   for (long k = 1; k <= kSteps; ++k) {
     truth = VelocityMotionModel::apply(truth, u);  // the robot drives the circle exactly
-    const VelocityControl odometry{u.v + config.noise.sigma_v * n01(rng), u.w + config.noise.sigma_w * n01(rng), u.dt};
+    const VelocityControl odometry{u.v + noise.sigma_v * n01(rng), u.w + noise.sigma_w * n01(rng), u.dt};
     z.clear();
     for (std::size_t i = 0; i < landmarks.size(); ++i) {
       if ((landmarks[i] - truth.head<2>()).norm() > kSensorRange) continue;
       const Vec2 h = RangeBearingModel(1.0, 1.0).predict(truth, landmarks[i]);
       z.push_back({static_cast<int>(i),
-                   Vec2(h.x() + config.noise.sigma_range * n01(rng),
-                        wrapAngle(h.y() + config.noise.sigma_bearing * n01(rng))),
+                   Vec2(h.x() + noise.sigma_range * n01(rng),
+                        wrapAngle(h.y() + noise.sigma_bearing * n01(rng))),
                    std::nullopt});
     }
     seif.step(odometry, z);

@@ -134,7 +134,7 @@ PaperData paperData(std::uint64_t seed, PaperPath path) {
   world.paper_path = path;
   PaperData p;
   p.data = buildDataset(simulate(world));
-  p.config.noise = p.data.noise.value_or(world.noise);
+  p.config = paperFilterConfig(p.data.noise.value_or(world.noise));
   p.start = startPose(p.data);
   return p;
 }
@@ -219,7 +219,7 @@ TEST(BatchMap, BeatsTheEkfOnThePaperWorld) {
 }
 
 TEST(BatchMap, NeedsTheMotionInputAndTheConfigSensor) {
-  BatchMap batch(Pose2::Zero(), FilterConfig{});
+  BatchMap batch(Pose2::Zero(), paperFilterConfig(NoiseModel{}));
   EXPECT_THROW(batch.predict(MotionIncrement{}), ModelError);
   const RangeBearingModel other(0.1, 0.1);
   const std::vector<Observation> obs{{1, Vec2(1.0, 0.2), std::nullopt}};

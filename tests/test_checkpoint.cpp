@@ -2,6 +2,7 @@
 // bit-identical to the uninterrupted run; save-load-save is byte-identical; every damaged
 // file is a DataError naming it.
 #include "../fuzz/fuzz_checkpoint.hpp"
+#include "core/binary_archive.hpp"
 #include "scenario.hpp"
 
 #include <seif/core/errors.hpp>
@@ -296,8 +297,8 @@ TEST(CheckpointDamage, ForeignFiles) {
   magic[0] = 'X';
   EXPECT_NE(expectDataError(magic).find("magic"), std::string::npos);
   std::string future = bytes;
-  future[8] = 2;
-  EXPECT_NE(expectDataError(future).find("version 2"), std::string::npos);
+  future[8] = static_cast<char>(kArchiveVersion + 1);
+  EXPECT_NE(expectDataError(future).find("version " + std::to_string(kArchiveVersion + 1)), std::string::npos);
   std::string zero = bytes;
   zero[8] = 0;
   EXPECT_NE(expectDataError(zero).find("version 0"), std::string::npos);
@@ -358,6 +359,13 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   for (const auto& entry : fs::directory_iterator(root / "regressions" / "fuzz_checkpoint")) {
     EXPECT_THROW((void)load(entry.path()), DataError) << entry.path();
   }
+  // A version-1 file (its config held the default models' sigmas) loads to the same state as
+  // the version-2 file of the same run.
+  const auto v1 = load(root / "corpus" / "fuzz_checkpoint" / "ekf-v1.ckpt");
+  const auto v2 = load(root / "corpus" / "fuzz_checkpoint" / "ekf.ckpt");
+  EXPECT_TRUE(v1->mean() == v2->mean());
+  EXPECT_TRUE(v1->covariance() == v2->covariance());
+  EXPECT_EQ(v1->landmarkIds(), v2->landmarkIds());
 }
 #endif
 

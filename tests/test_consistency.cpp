@@ -40,7 +40,7 @@ TEST(ChiSquare, NeesBandIsTheBandOfTheMeanOfRunsValues) {
 
 // An EKF with two landmarks, and true positions off its estimates by known amounts.
 struct TwoLandmarks {
-  seif::EkfSlam ekf{seif::Pose2(0.1, 0.2, 0.3), seif::FilterConfig{}};
+  seif::EkfSlam ekf{seif::Pose2(0.1, 0.2, 0.3), seif::paperFilterConfig(seif::NoiseModel{})};
   std::map<int, seif::Vec2> truth;
   seif::Pose2 true_pose;
   TwoLandmarks() {

@@ -17,8 +17,7 @@ double smallestEigenvalue(const Eigen::MatrixXd& A) {
 
 TEST(CovarianceRecovery, ExactEqualsTheDenseInverseAndLocalIsSmaller) {
   const test::Scenario s = test::makeScenario(4, 40, 150);
-  FilterConfig c;
-  c.noise = s.noise;
+  FilterConfig c = paperFilterConfig(s.noise);
   SeifOptions exact_options, local_options;
   local_options.covariance = SeifOptions::Covariance::Local;
   SeifSlam exact(s.start, c, exact_options), local(s.start, c, local_options);

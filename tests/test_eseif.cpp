@@ -190,7 +190,7 @@ TEST(Eseif, SpecSelectsItAndBetaIsValidated) {
   EXPECT_THROW(parseFilterSpec("ekf:beta=3"), seif::InvalidArgument);
   SeifOptions o = eseifOptions(SeifOptions::Mean::Amortized, 4);
   o.beta = 1;
-  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), seif::InvalidArgument);
+  EXPECT_THROW(SeifSlam(Pose2::Zero(), paperFilterConfig(NoiseModel{}), o), seif::InvalidArgument);
 }
 
 TEST(Eseif, WithoutAUsableZBetaItDefersThenFallsBackAndCounts) {

@@ -25,8 +25,7 @@ namespace {
 using namespace seif;
 
 FilterConfig configFor(const test::Scenario& s, Linearization l) {
-  FilterConfig c;
-  c.noise = s.noise;
+  FilterConfig c = paperFilterConfig(s.noise);
   c.linearization = l;
   return c;
 }
@@ -135,8 +134,7 @@ TEST(FirstEstimates, IncrementChangesOnlyTheHeadingColumn) {
 
 TEST(FirstEstimates, StandardIsBitIdenticalToTheDefault) {
   const test::Scenario s = test::makeScenario(7, 30, 150);
-  FilterConfig plain;
-  plain.noise = s.noise;
+  FilterConfig plain = paperFilterConfig(s.noise);
   for (const std::string name : {"ekf", "eif", "seif", "seif:mean=exact"}) {
     std::unique_ptr<SlamFilter> a = makeFilter(name, s.start, plain);
     const std::string spec = name + (name.find(':') == std::string::npos ? ":" : ",");
@@ -193,8 +191,7 @@ Consistency paperConsistency(const std::string& spec, PaperPath path, double sen
     world.paper_path = path;
     if (sensor_sigma > 0.0) world.noise.sigma_range = world.noise.sigma_bearing = sensor_sigma;
     const Dataset data = buildDataset(simulate(world));
-    FilterConfig config;
-    config.noise = data.noise.value_or(world.noise);
+    FilterConfig config = paperFilterConfig(data.noise.value_or(world.noise));
     SeifOptions seif;
     seif.seed = seed;
     std::unique_ptr<SlamFilter> filter = makeFilter(spec, startPose(data), config, seif);

@@ -104,8 +104,7 @@ TEST(DenseFilters, BearingInnovationIsWrappedForALandmarkBehind) {
   // +pi and measurements fall on both sides of the seam. Without wrapping, a measurement
   // at -pi + 0.01 would be a 2 pi innovation and throw the pose off.
   constexpr double kPi = std::numbers::pi;
-  FilterConfig config;
-  config.noise = {0.01, 0.01, 0.05, 0.02};
+  FilterConfig config = paperFilterConfig({0.01, 0.01, 0.05, 0.02});
   for (int which = 0; which < 2; ++which) {
     std::unique_ptr<SlamFilter> f;
     if (which == 0) f = std::make_unique<EkfSlam>(Pose2::Zero(), config);
@@ -137,8 +136,8 @@ TEST(DenseFilters, StatsCountTheFullGraphOfTheDenseFilters) {
 }
 
 TEST(DenseFilters, UnknownLandmarkQueriesThrow) {
-  EkfSlam ekf(Pose2::Zero(), FilterConfig{});
-  EifSlam eif(Pose2::Zero(), FilterConfig{});
+  EkfSlam ekf(Pose2::Zero(), paperFilterConfig(NoiseModel{}));
+  EifSlam eif(Pose2::Zero(), paperFilterConfig(NoiseModel{}));
   EXPECT_THROW(ekf.landmark(3), seif::UnknownLandmark);
   EXPECT_THROW(eif.landmarkCovariance(3), seif::UnknownLandmark);
 }

@@ -33,7 +33,7 @@ std::size_t entries(const fs::path& dir) {
 /// An EKF whose covariance read-out fails at the third landmark, as an interrupted run would.
 class FailingFilter : public SlamFilter {
  public:
-  FailingFilter() : SlamFilter(FilterConfig{}), ekf_(Pose2::Zero(), FilterConfig{}) {}
+  FailingFilter() : SlamFilter(paperFilterConfig(NoiseModel{})), ekf_(Pose2::Zero(), paperFilterConfig(NoiseModel{})) {}
   std::string name() const override { return "failing"; }
   using SlamFilter::predict;
   using SlamFilter::update;

@@ -88,8 +88,7 @@ TEST(OutlierGate, RejectsNothingOnTheSimulatorsWorlds) {
       const Dataset data = buildDataset(simulate(world));
       for (const char* name : c.filters) {
         SCOPED_TRACE(std::string(worldPresetName(c.preset)) + " seed " + std::to_string(seed) + " " + name);
-        FilterConfig config;
-        config.noise = *data.noise;
+        FilterConfig config = paperFilterConfig(*data.noise);
         auto filter = makeFilter(name, startPose(data), config);
         EXPECT_EQ(runFilter(*filter, data).rejected_observations, 0u);
       }

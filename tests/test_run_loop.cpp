@@ -53,8 +53,7 @@ struct World {
   Dataset data;
   explicit World(std::uint64_t seed) : log(simulate(presetConfig(WorldPreset::Paper, 20, 120, seed))), data(buildDataset(log)) {}
   std::unique_ptr<SlamFilter> filter(const std::string& name) const {
-    FilterConfig config;
-    config.noise = data.noise.value_or(NoiseModel{});
+    FilterConfig config = paperFilterConfig(data.noise.value_or(NoiseModel{}));
     return makeFilter(name, startPose(data), config);
   }
 };

@@ -121,7 +121,7 @@ TEST(RunStream, EqualsTheInMemoryRunForEveryFilter) {
     config.sensor = source.info().sensor;
     auto streamed = makeFilter(name, source.info().start_pose, config);
     const RunOutput a = runFilter(*streamed, source);
-    auto in_memory = makeFilter(name, startPose(data), FilterConfig{});
+    auto in_memory = makeFilter(name, startPose(data), paperFilterConfig(NoiseModel{}));
     const RunOutput b = runFilter(*in_memory, data);
     ASSERT_EQ(a.trajectory.size(), b.trajectory.size()) << name;
     for (std::size_t k = 0; k < a.trajectory.size(); ++k) {

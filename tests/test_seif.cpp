@@ -192,10 +192,10 @@ TEST(Seif, AccuracyIsCloseToTheEkf) {
 TEST(Seif, OptionsAreValidated) {
   SeifOptions o;
   o.active = 0;
-  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), seif::InvalidArgument);
+  EXPECT_THROW(SeifSlam(Pose2::Zero(), paperFilterConfig(NoiseModel{}), o), seif::InvalidArgument);
   o.active = 6;
   o.relax = -1;
-  EXPECT_THROW(SeifSlam(Pose2::Zero(), FilterConfig{}, o), seif::InvalidArgument);
+  EXPECT_THROW(SeifSlam(Pose2::Zero(), paperFilterConfig(NoiseModel{}), o), seif::InvalidArgument);
   EXPECT_EQ(SeifOptions::parseMean("exact"), SeifOptions::Mean::Exact);
   EXPECT_THROW(SeifOptions::parseDeactivate("random"), seif::InvalidArgument);
   EXPECT_EQ(SeifOptions::parseRecovery("after-update"), SeifOptions::Recovery::AfterMeasurement);

@@ -106,8 +106,7 @@ namespace {
 // Returns the ESEIF relocalisations among the steps.
 std::size_t expectNoHeapAllocationInSteadyStateSteps(const seif::SeifOptions& options) {
   const seif::test::Scenario s = seif::test::makeScenario(31, 25, 1500);
-  seif::FilterConfig config;
-  config.noise = s.noise;
+  seif::FilterConfig config = seif::paperFilterConfig(s.noise);
   seif::SeifSlam seif(s.start, config, options);
   std::size_t checked = 0, allocating = 0;
   for (std::size_t k = 0; k < s.steps.size(); ++k) {
@@ -146,8 +145,7 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateEseifSteps) {
 // (3+2N) x 2 right-hand side per landmark: one allocation each, O(N^2) for a map).
 TEST(SeifAllocation, AllMarginalsOfAStateCostOneFactorisation) {
   const seif::test::Scenario s = seif::test::makeScenario(7, 600, 200, 4.0);
-  seif::FilterConfig config;
-  config.noise = s.noise;
+  seif::FilterConfig config = seif::paperFilterConfig(s.noise);
   seif::SeifSlam seif(s.start, config);
   for (const seif::Step& step : s.steps) seif.step(step.u, step.observations);
   ASSERT_GT(seif.landmarkIds().size(), 300u);

@@ -53,8 +53,7 @@ struct Scaling {
 Scaling runCorridor(int landmarks, long m_limit) {
   const WorldConfig world = presetConfig(WorldPreset::Corridor, landmarks, 0, 1);
   const Dataset data = buildDataset(simulate(world));
-  FilterConfig config;
-  config.noise = world.noise;
+  FilterConfig config = paperFilterConfig(world.noise);
   const SeifOptions options;  // theta_x = 6, K = 10: the paper's
   SeifSlam seif(startPose(data), config, options);
   const long theta = options.active, K = options.relax;

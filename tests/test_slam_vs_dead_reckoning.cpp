@@ -24,8 +24,7 @@ struct Errors {
 Errors run(const WorldConfig& world, const char* filter) {
   const RobotLog log = simulate(world);
   const Dataset data = buildDataset(log);
-  FilterConfig config;
-  config.noise = world.noise;
+  FilterConfig config = paperFilterConfig(world.noise);
   auto f = makeFilter(filter, startPose(data), config);
   const RunOutput out = runFilter(*f, data);
   const auto dr = deadReckoning(data, startPose(data), f->motionModel());

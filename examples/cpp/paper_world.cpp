@@ -19,10 +19,9 @@ int main() {
   const WorldConfig world = presetConfig(WorldPreset::Paper, 0, 0, /*seed=*/1);
   const Dataset data = buildDataset(simulate(world));
 
-  // The filters use the simulator's own noise, with the paper's models.
-  FilterConfig config;
-  config.motion = std::make_shared<VelocityModel>(world.noise.sigma_v, world.noise.sigma_w, NoiseForm::PerStep);
-  config.sensor = std::make_shared<RangeBearingModel>(world.noise.sigma_range, world.noise.sigma_bearing);
+  // The filters use the simulator's own noise, with the paper's models (a VelocityModel
+  // with per-step noise and a RangeBearingModel).
+  const FilterConfig config = paperFilterConfig(world.noise);
 
   bool ok = true;
   for (const char* spec : {"ekf", "seif"}) {

@@ -2,9 +2,9 @@
 
 Symbols used below:
   seif.make_filter(spec, start, config)  builds a filter ("seif", "ekf", "eif", "batch")
-  seif.FilterConfig                       noise and models of the filter; with no models
-                                          given, the velocity motion model and a
-                                          range-bearing sensor built from config.noise
+  seif.NoiseModel                         the noise standard deviations of driver and sensor
+  seif.paper_filter_config(noise)         a FilterConfig with the velocity motion model and a
+                                          range-bearing sensor of that noise
   seif.VelocityControl(v, w, dt)          forward speed v [m/s], turn rate w [rad/s] for dt [s]
   seif.Observation(id, z)                 z = (range [m], bearing [rad]) of landmark `id`
   filter.predict(u) / filter.update(zs)   the motion and the measurement update
@@ -23,8 +23,8 @@ angles = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
 landmarks = {i: np.array([4.0 * np.cos(a), 4.0 * np.sin(a)]) for i, a in enumerate(angles)}
 
 # --- 2. The filter: noise standard deviations the driver and sensor really have. --------------
-config = seif.FilterConfig()
-config.noise = seif.NoiseModel(sigma_v=0.05, sigma_w=0.02, sigma_range=0.1, sigma_bearing=0.02)
+noise = seif.NoiseModel(sigma_v=0.05, sigma_w=0.02, sigma_range=0.1, sigma_bearing=0.02)
+config = seif.paper_filter_config(noise)
 start = np.array([2.0, 0.0, np.pi / 2])  # x [m], y [m], heading [rad]
 slam = seif.make_filter("seif", start, config)
 
@@ -34,8 +34,8 @@ truth = start.copy()
 sensor_range = 3.5  # [m]
 for k in range(int(2 * 2 * np.pi / (w * dt))):
     # 3a. What the robot really does: the commanded (v, w) plus actuator noise.
-    v_true = v + rng.normal(0.0, config.noise.sigma_v)
-    w_true = w + rng.normal(0.0, config.noise.sigma_w)
+    v_true = v + rng.normal(0.0, noise.sigma_v)
+    w_true = w + rng.normal(0.0, noise.sigma_w)
     truth = seif.VelocityModel(0.0, 0.0).apply(truth, seif.VelocityControl(v_true, w_true, dt))
 
     # 3b. The filter predicts with what the driver commanded.
@@ -48,8 +48,8 @@ for k in range(int(2 * 2 * np.pi / (w * dt))):
         r = np.hypot(*d)
         if r < sensor_range:
             bearing = seif.wrap_angle(np.arctan2(d[1], d[0]) - truth[2])
-            z = np.array([r + rng.normal(0.0, config.noise.sigma_range),
-                          bearing + rng.normal(0.0, config.noise.sigma_bearing)])
+            z = np.array([r + rng.normal(0.0, noise.sigma_range),
+                          bearing + rng.normal(0.0, noise.sigma_bearing)])
             observations.append(seif.Observation(lid, z))
     slam.update(observations)
 

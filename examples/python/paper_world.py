@@ -21,8 +21,7 @@ print(f"paper world: {len(data.landmarks)} landmarks, {len(data)} steps, "
       f"sensor range {world.sensor_range} m")
 
 # --- 2. The filters, built with the world's true noise and the paper's models. ---------------
-config = seif.FilterConfig()
-config.noise = world.noise
+config = seif.paper_filter_config(world.noise)
 filters = {spec: seif.make_filter(spec, seif.start_pose(data), config)
            for spec in ("ekf", "seif", "seif:mean=exact")}
 

@@ -59,7 +59,7 @@ def simulated_dataset(preset="paper", landmarks=0, steps=0, seed=1, **fields):
     ``preset``: ``"paper"``, ``"uniform"`` or ``"corridor"`` (or a ``WorldPreset``);
     ``landmarks`` / ``steps`` <= 0 take the preset's defaults; other ``WorldConfig`` fields
     (``paper_path``, ``sensor_range``, ...) may be given by name. Returns ``(dataset, config)``;
-    the filter's noise should be ``config.noise`` (the world's true noise).
+    ``paper_filter_config(config.noise)`` is the filter configuration with the world's true noise.
     """
     config = _core.preset_config(preset, landmarks, steps, seed)
     for name, value in fields.items():

@@ -79,26 +79,29 @@ void bindConfig(py::module_& m) {
       .value("FirstEstimates", Linearization::FirstEstimates);
 
   py::class_<FilterConfig>(m, "FilterConfig",
-                           "What every filter is built with (filters/slam_filter.hpp). motion / sensor None: the "
-                           "paper's velocity model (per-step) and range-bearing sensor from `noise`.")
+                           "What every filter is built with (filters/slam_filter.hpp): the motion and sensor models "
+                           "(both required: paper_filter_config(noise) builds the paper's, DatasetInfo.filter_config() "
+                           "a dataset's), the start pose's sigmas, the outlier gate and the linearization.")
       .def(py::init<>())
       .def_property(
           "motion", [](const FilterConfig& c) { return mutableModel(c.motion); },
           [](FilterConfig& c, std::shared_ptr<MotionModel> p) { c.motion = std::move(p); },
-          "The motion model of predict(input); None: the paper's.")
+          "The motion model of predict(input).")
       .def_property(
           "sensor", [](const FilterConfig& c) { return mutableModel(c.sensor); },
           [](FilterConfig& c, std::shared_ptr<MeasurementModel> p) { c.sensor = std::move(p); },
-          "The sensor model of update(observations); None: the paper's.")
-      .def_readwrite("noise", &FilterConfig::noise, "NoiseModel of the default models")
+          "The sensor model of update(observations).")
       .def_readwrite("initial_pose_sigma", &FilterConfig::initial_pose_sigma,
                      "start pose standard deviations (x [m], y [m], theta [rad])")
       .def_readwrite("outlier_gate", &FilterConfig::outlier_gate,
                      "gross-outlier gate in measurement standard deviations; inf disables it")
       .def_readwrite("linearization", &FilterConfig::linearization)
       .def("__repr__", [](py::handle s) {
-        return reprOf(s, {"motion", "sensor", "noise", "initial_pose_sigma", "outlier_gate", "linearization"});
+        return reprOf(s, {"motion", "sensor", "initial_pose_sigma", "outlier_gate", "linearization"});
       });
+  m.def("paper_filter_config", &paperFilterConfig, py::arg("noise"),
+        "A FilterConfig with the paper's models: VelocityModel(sigma_v, sigma_w, per-step) and "
+        "RangeBearingModel(sigma_range, sigma_bearing).");
 
   py::class_<FilterStats>(m, "FilterStats", "Structure of the information matrix H (filters/slam_filter.hpp).")
       .def(py::init<>())
@@ -265,13 +268,13 @@ void bindSlamFilter(py::module_& m) {
       });
 
   py::class_<EkfSlam, SlamFilter>(m, "EkfSlam", "EKF-SLAM with a dense covariance.")
-      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config") = FilterConfig{});
+      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config"));
   py::class_<EifSlam, SlamFilter>(m, "EifSlam", "The exact EIF with a dense information matrix.")
-      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config") = FilterConfig{})
+      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config"))
       .def("information_vector", &EifSlam::informationVector, "b");
   py::class_<SeifSlam, SlamFilter>(m, "SeifSlam", "The Sparse Extended Information Filter.")
       .def(py::init<const Pose2&, const FilterConfig&, const SeifOptions&>(), py::arg("start"),
-           py::arg("config") = FilterConfig{}, py::arg("options") = SeifOptions{})
+           py::arg("config"), py::arg("options") = SeifOptions{})
       .def("information", &SeifSlam::sparseInformation,
            "H as scipy.sparse.csc_matrix, in the state order (SeifSlam::sparseInformation()).")
       .def("information_vector", &SeifSlam::informationVector, "b")
@@ -285,7 +288,7 @@ void bindSlamFilter(py::module_& m) {
       .def_property_readonly("eseif_deferrals", &SeifSlam::eseifDeferrals)
       .def_property_readonly("eseif_fallbacks", &SeifSlam::eseifFallbacks);
   py::class_<BatchMap, SlamFilter>(m, "BatchMap", "The batch MAP smoother: estimates are final after finish().")
-      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config") = FilterConfig{})
+      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config"))
       .def_property_readonly("cost", &BatchMap::cost)
       .def_property_readonly("iterations", &BatchMap::iterations)
       .def_property_readonly("constraint_violation", &BatchMap::constraintViolation);
@@ -295,7 +298,7 @@ void bindSlamFilter(py::module_& m) {
       [](const std::string& spec, const Pose2& start, const FilterConfig& config, const SeifOptions& seif) {
         return makeFilter(spec, start, config, seif);
       },
-      py::arg("spec") = "seif", py::arg("start") = Pose2::Zero().eval(), py::arg("config") = FilterConfig{},
+      py::arg("spec"), py::arg("start"), py::arg("config"),
       py::arg("seif_options") = SeifOptions{},
       "Builds a filter from its spec, 'ekf', 'eif', 'seif', 'batch', with options after a colon "
       "('seif:sparsify=eseif,linearization=fej'); unset options come from config.linearization and "

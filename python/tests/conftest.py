@@ -69,6 +69,4 @@ def simulated_folder(tmp_path_factory):
 
 def paper_config(world):
     """The FilterConfig of a simulated world: its true noise, the paper's models."""
-    config = seif.FilterConfig()
-    config.noise = world.noise
-    return config
+    return seif.paper_filter_config(world.noise)

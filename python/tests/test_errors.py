@@ -44,11 +44,25 @@ def test_data_error_message_is_the_clis(cli, malformed_isam, tmp_path):
     assert str(info.value) in proc.stderr
 
 
+PAPER = seif.paper_filter_config(seif.NoiseModel())
+
+
+def test_a_config_without_models_is_invalid_argument():
+    """No silent fallback to the paper's models: a filter needs both of its models."""
+    for spec in ("ekf", "eif", "seif", "batch"):
+        with pytest.raises(seif.InvalidArgument, match="no motion model"):
+            seif.make_filter(spec, np.zeros(3), seif.FilterConfig())
+    config = seif.FilterConfig()
+    config.motion = PAPER.motion
+    with pytest.raises(seif.InvalidArgument, match="no sensor model"):
+        seif.make_filter("seif", np.zeros(3), config)
+
+
 def test_bad_spec_is_invalid_argument():
     with pytest.raises(seif.InvalidArgument, match="unknown filter 'kalman'"):
-        seif.make_filter("kalman", np.zeros(3))
+        seif.make_filter("kalman", np.zeros(3), PAPER)
     with pytest.raises(seif.InvalidArgument, match="sparsify"):
-        seif.make_filter("seif:sparsify=never", np.zeros(3))
+        seif.make_filter("seif:sparsify=never", np.zeros(3), PAPER)
     with pytest.raises(seif.InvalidArgument):
         seif.parse_filter_spec("ekf:active=3")
     with pytest.raises(seif.InvalidArgument):
@@ -67,7 +81,7 @@ def test_model_error_is_invalid_argument():
 
 @pytest.mark.parametrize("spec", ["ekf", "eif", "seif"])
 def test_unknown_landmark(spec):
-    f = seif.make_filter(spec, np.zeros(3))
+    f = seif.make_filter(spec, np.zeros(3), PAPER)
     f.update([seif.Observation(3, np.array([0.5, 0.2]))])
     assert f.landmark_ids() == [3]
     with pytest.raises(seif.UnknownLandmark) as info:
@@ -87,7 +101,7 @@ def test_failure_inside_a_run_is_numeric_error():
     bad = seif.Step(2.0, seif.VelocityControl(0.1, 0.0, 1.0), [seif.Observation(2, np.array([0.0, 0.0]))])
     data.steps = [good, bad]
     with pytest.raises(seif.NumericError, match="step 1"):
-        seif.run_filter(seif.make_filter("ekf", np.zeros(3)), data)
+        seif.run_filter(seif.make_filter("ekf", np.zeros(3), PAPER), data)
 
 
 def test_bad_world_config_is_invalid_argument():
@@ -110,4 +124,4 @@ def test_exception_in_progress_callback_propagates(simulated_folder, tmp_path):
         seif.run_dataset(seif.RunRequest(str(simulated_folder), "seif"), str(tmp_path), stop)
     data, _ = seif.simulated_dataset("paper", steps=30)
     with pytest.raises(Stop):
-        seif.run_filter(seif.make_filter("ekf", seif.start_pose(data)), data, stop)
+        seif.run_filter(seif.make_filter("ekf", seif.start_pose(data), PAPER), data, stop)

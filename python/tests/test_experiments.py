@@ -33,8 +33,7 @@ def test_paper_detail_filters_reproduce_the_run():
     assert count == run.filters[0].mapped
     assert mse == run.filters[0].mse
     # The same EKF rebuilt and stepped from Python gives the same map.
-    config = seif.FilterConfig()
-    config.noise = world.noise
+    config = seif.paper_filter_config(world.noise)
     mine = seif.make_filter("ekf", seif.start_pose(detail.data), config)
     for step in detail.data.steps:
         mine.step(step.u, step.observations)

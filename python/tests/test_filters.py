@@ -146,6 +146,7 @@ def test_seif_options_and_config_fields():
         options.relax_order = "sideways"
     config = seif.FilterConfig()
     assert config.motion is None and config.sensor is None
+    config.motion = seif.VelocityModel(0.1, 0.05)
     config.sensor = seif.CartesianModel(np.eye(2) * 0.01)
     config.linearization = "fej"
     assert config.linearization == seif.Linearization.FirstEstimates

@@ -109,8 +109,7 @@ BenchMeasurement runBenchCase(const BenchCase& c) {
   trimHeap();
   m.sim_seconds = std::chrono::duration<double>(Clock::now() - t_sim).count();
 
-  FilterConfig config;
-  config.noise = world.noise;
+  const FilterConfig config = paperFilterConfig(world.noise);
   const ProcessMemory before = processMemory();
   m.data_rss_mb = before.rss_mb;
   m.sim_peak_mb = before.peak_mb;

@@ -187,8 +187,7 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     WorldConfig world = options.world;
     world.seed = options.world.seed + r;
     const Dataset data = buildDataset(simulate(world));
-    FilterConfig config;
-    config.noise = data.noise.value_or(world.noise);
+    const FilterConfig config = paperFilterConfig(data.noise.value_or(world.noise));
     const Pose2 start = startPose(data);
     const std::vector<std::size_t> samples = sampleSteps(data.steps.size(), options.samples);
     steps_of_run[r] = data.steps.size();

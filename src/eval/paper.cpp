@@ -82,8 +82,7 @@ PaperRun runPaperExperiment(std::uint64_t seed, const PaperOptions& options,
   Dataset data = buildDataset(log);
   run.steps = data.steps.size();
 
-  FilterConfig config;
-  config.noise = data.noise.value_or(world.noise);
+  const FilterConfig config = paperFilterConfig(data.noise.value_or(world.noise));
   const Pose2 start = startPose(data);
   const Pose2 true_end = data.groundtruth.empty()
                              ? Pose2::Zero()

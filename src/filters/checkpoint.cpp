@@ -40,13 +40,9 @@ CheckpointExtras readExtras(ArchiveReader& in) {
   return extras;
 }
 
-// FilterConfig without its models (written separately, resolved: what the filter uses).
+// FilterConfig without its models (written separately).
 void writeConfig(ArchiveWriter& out, const FilterConfig& c) {
   out.section("config");
-  out.f64(c.noise.sigma_v);
-  out.f64(c.noise.sigma_w);
-  out.f64(c.noise.sigma_range);
-  out.f64(c.noise.sigma_bearing);
   out.fixed(c.initial_pose_sigma);
   out.f64(c.outlier_gate);
   out.u64(c.linearization == Linearization::FirstEstimates ? 1 : 0);
@@ -55,10 +51,9 @@ void writeConfig(ArchiveWriter& out, const FilterConfig& c) {
 FilterConfig readConfig(ArchiveReader& in) {
   in.section("config");
   FilterConfig c;
-  c.noise.sigma_v = in.f64("sigma_v");
-  c.noise.sigma_w = in.f64("sigma_w");
-  c.noise.sigma_range = in.f64("sigma_range");
-  c.noise.sigma_bearing = in.f64("sigma_bearing");
+  if (in.version() == 1) {  // version 1 held the sigmas of the default models, now always stored as models
+    for (const char* name : {"sigma_v", "sigma_w", "sigma_range", "sigma_bearing"}) (void)in.f64(name);
+  }
   in.fixed("initial pose sigma", c.initial_pose_sigma);
   c.outlier_gate = in.f64("outlier gate");
   c.linearization = in.u64Max("linearization", 1) == 1 ? Linearization::FirstEstimates : Linearization::Standard;

@@ -19,13 +19,29 @@ std::string_view linearizationName(Linearization l) {
   return l == Linearization::FirstEstimates ? "fej" : "standard";
 }
 
+FilterConfig paperFilterConfig(const NoiseModel& noise) {
+  FilterConfig c;
+  c.motion = std::make_shared<VelocityModel>(noise.sigma_v, noise.sigma_w, NoiseForm::PerStep);
+  c.sensor = std::make_shared<RangeBearingModel>(noise.sigma_range, noise.sigma_bearing);
+  return c;
+}
+
+namespace {
+
+template <typename Model>
+std::shared_ptr<const Model> required(const std::shared_ptr<const Model>& model, const char* what) {
+  if (!model) {
+    throw InvalidArgument(std::string("FilterConfig: no ") + what +
+                          " model (set config.motion and config.sensor, e.g. with paperFilterConfig(noise) "
+                          "or a dataset's DatasetInfo)");
+  }
+  return model;
+}
+
+}  // namespace
+
 SlamFilter::SlamFilter(const FilterConfig& config)
-    : motion_(config.motion ? config.motion
-                            : std::make_shared<VelocityModel>(config.noise.sigma_v, config.noise.sigma_w,
-                                                              NoiseForm::PerStep)),
-      sensor_(config.sensor ? config.sensor
-                            : std::make_shared<RangeBearingModel>(config.noise.sigma_range,
-                                                                  config.noise.sigma_bearing)) {}
+    : motion_(required(config.motion, "motion")), sensor_(required(config.sensor, "sensor")) {}
 
 Eigen::Matrix<double, Eigen::Dynamic, 2> SlamFilter::landmarkCovarianceColumns(int id) const {
   const std::vector<int>& ids = landmarkIds();

@@ -37,12 +37,11 @@ Linearization parseLinearization(std::string_view s);
 std::string_view linearizationName(Linearization l);
 
 struct FilterConfig {
-  /// The models of the convenience calls predict(MotionInput) and update(observations).
-  /// When empty, the paper's: VelocityModel(noise.sigma_v, noise.sigma_w, PerStep) and
-  /// RangeBearingModel(noise.sigma_range, noise.sigma_bearing) at the vehicle's origin.
+  /// The models of the convenience calls predict(MotionInput) and update(observations):
+  /// both required (a filter refuses a config without them; paperFilterConfig() builds the
+  /// paper's, a dataset's DatasetInfo its own).
   std::shared_ptr<const MotionModel> motion;
   std::shared_ptr<const MeasurementModel> sensor;
-  NoiseModel noise;
   /// Initial pose standard deviations (x [m], y [m], theta [rad]). Information filters need
   /// a finite prior, so the start pose is anchored with this (small) uncertainty.
   Vec3 initial_pose_sigma = Vec3(1e-3, 1e-3, 1e-3);
@@ -50,6 +49,11 @@ struct FilterConfig {
   double outlier_gate = 1000.0;
   Linearization linearization = Linearization::Standard;
 };
+
+/// The paper's models with `noise`: VelocityModel(sigma_v, sigma_w, NoiseForm::PerStep) and
+/// RangeBearingModel(sigma_range, sigma_bearing) at the vehicle's origin; the other fields
+/// at their defaults.
+FilterConfig paperFilterConfig(const NoiseModel& noise);
 
 /// Structure of the information matrix, for tests, metrics.json and the paper's table.
 struct FilterStats {
