@@ -96,14 +96,39 @@ void BatchMap::invalidate() {
   violation_ = kNaN;
 }
 
-void BatchMap::predict(const MotionIncrement&) {
-  throw ModelError("batch: needs the motion input to relinearise; use predict(MotionInput)");
+namespace {
+
+/// The planar rotation by theta acting on a pose increment (x, y rotate, heading stays).
+Mat3 poseRotation(double theta) {
+  const double c = std::cos(theta), s = std::sin(theta);
+  Mat3 R;
+  R << c, -s, 0, s, c, 0, 0, 0, 1;
+  return R;
+}
+
+/// Its derivative in theta.
+Mat3 poseRotationDerivative(double theta) {
+  const double c = std::cos(theta), s = std::sin(theta);
+  Mat3 D;
+  D << -s, -c, 0, c, -s, 0, 0, 0, 0;
+  return D;
+}
+
+}  // namespace
+
+void BatchMap::predict(const MotionIncrement& increment) {
+  const Mat3 Rt = poseRotation(inner_.pose()(2)).transpose();
+  inner_.predict(increment);
+  invalidate();
+  inputs_.push_back({std::nullopt, Rt * increment.delta, Rt * increment.U * Rt.transpose()});
+  guess_.push_back(inner_.pose());
+  last_pose_links_ = 0;
 }
 
 void BatchMap::predict(const MotionInput& u) {
   inner_.predict(u);
   invalidate();
-  inputs_.push_back(u);
+  inputs_.push_back({u, Vec3::Zero(), Mat3::Zero()});
   guess_.push_back(inner_.pose());
   last_pose_links_ = 0;
 }
@@ -213,17 +238,29 @@ void BatchMap::linearize(const std::vector<Pose2>& poses, const std::vector<Vec2
   const MotionModel& motion = motionModel();
   std::array<Mat3, 3> dU;
   for (std::size_t k = 0; k < inputs_.size(); ++k) {
-    const MotionIncrement m = motion.linearize(poses[k], inputs_[k]);
+    const Motion& step = inputs_[k];
+    MotionIncrement m;
+    if (step.input) {
+      m = motion.linearize(poses[k], *step.input);
+      if (system) {
+        for (int i = 0; i < 3; ++i) {
+          const Vec3 e = kDifferenceStep * Vec3::Unit(i);
+          dU[static_cast<std::size_t>(i)] = (motion.linearize(Pose2(poses[k] + e), *step.input).U -
+                                             motion.linearize(Pose2(poses[k] - e), *step.input).U) /
+                                            (2.0 * kDifferenceStep);
+        }
+      }
+    } else {  // a body-frame motion: Delta = Rot(theta) body, U = Rot U_body Rot^T
+      const Mat3 R = poseRotation(poses[k](2)), D = poseRotationDerivative(poses[k](2));
+      m.delta = R * step.body;
+      m.J_delta_x.col(2) = D * step.body;
+      m.U = R * step.U_body * R.transpose();
+      dU[0].setZero();
+      dU[1].setZero();
+      dU[2] = D * step.U_body * R.transpose() + R * step.U_body * D.transpose();
+    }
     Vec3 r = poses[k + 1] - poses[k] - m.delta;
     r(2) = wrapAngle(r(2));
-    if (system) {
-      for (int i = 0; i < 3; ++i) {
-        const Vec3 e = kDifferenceStep * Vec3::Unit(i);
-        dU[static_cast<std::size_t>(i)] = (motion.linearize(Pose2(poses[k] + e), inputs_[k]).U -
-                                           motion.linearize(Pose2(poses[k] - e), inputs_[k]).U) /
-                                          (2.0 * kDifferenceStep);
-      }
-    }
     const auto i = 3 * static_cast<Eigen::Index>(k);
     gaussian(r, m.U, system ? &dU : nullptr,
              {{i, Mat3(-(Mat3::Identity() + m.J_delta_x))}, {i + 3, Mat3::Identity()}});

@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace seif {
@@ -34,7 +35,11 @@ class BatchMap final : public SlamFilter {
 
   std::string name() const override { return "batch"; }
   using SlamFilter::update;
-  /// Throws ModelError: an increment cannot be relinearised; use predict(MotionInput).
+  /// Records an increment already linearised by the caller at the inner EKF's pose (pose()):
+  /// the batch keeps it as a motion in the robot's frame, rotated with the pose's heading at
+  /// every iteration (exact for a model whose increment does not depend on where the robot
+  /// is - the velocity, Ackermann and odometry models; predict(MotionInput) relinearises any
+  /// model). Advances the inner EKF.
   void predict(const MotionIncrement& increment) override;
   /// Records u (config's motion model) and advances the inner EKF.
   void predict(const MotionInput& u) override;
@@ -119,7 +124,15 @@ class BatchMap final : public SlamFilter {
   Pose2 start_;
   EkfSlam inner_;
   LandmarkBook book_;
-  std::vector<MotionInput> inputs_;      // u_k moves x_k to x_{k+1}
+  /// Step k's motion: an input u_k, relinearised at every iteration, or a MotionIncrement
+  /// given already linearised (predict(MotionIncrement)), kept as a motion in the robot's
+  /// frame: Delta(x_k) = Rot(theta_k) body, U(x_k) = Rot(theta_k) U_body Rot(theta_k)^T.
+  struct Motion {
+    std::optional<MotionInput> input;
+    Vec3 body = Vec3::Zero();
+    Mat3 U_body = Mat3::Zero();
+  };
+  std::vector<Motion> inputs_;  // step k moves x_k to x_{k+1}
   std::vector<Measurement> measurements_;
   std::vector<Pose2> guess_;             // the inner EKF's pose after every step (x_0 first)
   // Structure (stats()).
