@@ -72,11 +72,12 @@ void bindSeifOptions(py::module_& m) {
 
 void bindConfig(py::module_& m) {
   bindNamedEnum<Linearization>(m, "Linearization",
-                               "Where Jacobians are evaluated: Standard (newest estimates) or FirstEstimates "
-                               "(FEJ). Strings 'standard' | 'fej'.",
+                               "Where Jacobians are evaluated: Standard (newest estimates), FirstEstimates "
+                               "(FEJ) or Invariant (the right-invariant EKF). Strings 'standard' | 'fej' | 'invariant'.",
                                &parseLinearization, &linearizationName)
       .value("Standard", Linearization::Standard)
-      .value("FirstEstimates", Linearization::FirstEstimates);
+      .value("FirstEstimates", Linearization::FirstEstimates)
+      .value("Invariant", Linearization::Invariant);
 
   py::class_<FilterConfig>(m, "FilterConfig",
                            "What every filter is built with (filters/slam_filter.hpp): the motion and sensor models "
@@ -96,8 +97,9 @@ void bindConfig(py::module_& m) {
       .def_readwrite("outlier_gate", &FilterConfig::outlier_gate,
                      "gross-outlier gate in measurement standard deviations; inf disables it")
       .def_readwrite("linearization", &FilterConfig::linearization)
+      .def_readwrite("iterations", &FilterConfig::iterations, "Gauss-Newton iterations of each measurement update")
       .def("__repr__", [](py::handle s) {
-        return reprOf(s, {"motion", "sensor", "initial_pose_sigma", "outlier_gate", "linearization"});
+        return reprOf(s, {"motion", "sensor", "initial_pose_sigma", "outlier_gate", "linearization", "iterations"});
       });
   m.def("paper_filter_config", &paperFilterConfig, py::arg("noise"),
         "A FilterConfig with the paper's models: VelocityModel(sigma_v, sigma_w, per-step) and "
@@ -135,9 +137,10 @@ void bindConfig(py::module_& m) {
       .def_readwrite("text", &FilterSpec::text)
       .def_readwrite("name", &FilterSpec::name)
       .def_readwrite("linearization", &FilterSpec::linearization)
+      .def_readwrite("iterations", &FilterSpec::iterations)
       .def_readwrite("seif", &FilterSpec::seif)
-      .def("__repr__", [](py::handle s) { return reprOf(s, {"text", "name", "linearization", "seif"}); });
-  m.def("parse_filter_spec", &parseFilterSpec, py::arg("text"), py::arg("linearization") = Linearization::Standard,
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"text", "name", "linearization", "iterations", "seif"}); });
+  m.def("parse_filter_spec", py::overload_cast<std::string_view, Linearization, const SeifOptions&>(&parseFilterSpec), py::arg("text"), py::arg("linearization") = Linearization::Standard,
         py::arg("seif") = SeifOptions{},
         "Parses 'name[:key=value,...]' (ekf, eif, seif, batch). Raises InvalidArgument naming what is wrong.");
   m.def("canonical_filter_spec", &canonicalFilterSpec, py::arg("spec"),

@@ -45,7 +45,8 @@ void writeConfig(ArchiveWriter& out, const FilterConfig& c) {
   out.section("config");
   out.fixed(c.initial_pose_sigma);
   out.f64(c.outlier_gate);
-  out.u64(c.linearization == Linearization::FirstEstimates ? 1 : 0);
+  out.u64(static_cast<std::uint64_t>(c.linearization));
+  out.u64(static_cast<std::uint64_t>(c.iterations));
 }
 
 FilterConfig readConfig(ArchiveReader& in) {
@@ -56,7 +57,9 @@ FilterConfig readConfig(ArchiveReader& in) {
   }
   in.fixed("initial pose sigma", c.initial_pose_sigma);
   c.outlier_gate = in.f64("outlier gate");
-  c.linearization = in.u64Max("linearization", 1) == 1 ? Linearization::FirstEstimates : Linearization::Standard;
+  c.linearization = static_cast<Linearization>(in.u64Max("linearization", in.version() == 1 ? 1 : 2));
+  if (in.version() >= 2) c.iterations = static_cast<int>(in.u64Max("iterations", 20));
+  if (c.iterations < 1) in.fail("iterations must be >= 1");
   return c;
 }
 

@@ -2,6 +2,7 @@
 #include <seif/core/errors.hpp>
 #include "filters/eif_slam.hpp"
 #include "filters/information_ops.hpp"
+#include "filters/invariant.hpp"
 
 #include <Eigen/LU>
 #include <sstream>
@@ -171,6 +172,10 @@ void EifSlam::applyPlan(std::span<const PlannedObservation> plan, const Measurem
     mu_.conservativeResize(n + 2);
     mu_.tail<2>() = p.initial;
   }
+  if (config_.iterations > 1 || config_.linearization == Linearization::Invariant) {
+    applyIterated(plan, sensor);
+    return;
+  }
   // Paper eq. (21-22), all observations linearised at the prior mean (with FEJ: each
   // landmark's Jacobians at its first estimate); gross outliers are not in the plan.
   const Pose2 x = mu_.head<3>();
@@ -187,6 +192,51 @@ void EifSlam::applyPlan(std::span<const PlannedObservation> plan, const Measurem
   }
   llt_valid_ = false;
   recoverMean();
+}
+
+void EifSlam::applyIterated(std::span<const PlannedObservation> plan, const MeasurementModel& sensor) {
+  // The iterated update in information form, the EKF's to rounding: iteration i linearises
+  // at s_i = mu0 + delta_i (invariant: the retraction of delta_i) and solves
+  // (H0 + sum J^T Z^-1 J) delta_{i+1} = sum J^T Z^-1 (z - h(s_i) + J delta_i). A first
+  // sighting stays linearised at the prior, where the EKF initialises the landmark from it.
+  const bool invariant = config_.linearization == Linearization::Invariant;
+  const Eigen::MatrixXd H0 = H_;
+  const Eigen::VectorXd mu0 = mu_;
+  const Eigen::Index n = H_.rows();
+  Eigen::VectorXd delta = Eigen::VectorXd::Zero(n), s = mu0, g(n);
+  for (int it = 0; it < config_.iterations; ++it) {
+    H_ = H0;
+    g.setZero();
+    for (const PlannedObservation& p : plan) {
+      const Eigen::Index l = StateLayout::landmark(p.slot);
+      const bool fixed = p.first || it == 0;
+      const Eigen::VectorXd& at = fixed ? mu0 : s;
+      Mat23 Jx;
+      Mat2 Jy;
+      const Vec2 zhat = sensor.predict(at.head<3>(), at.segment<2>(l), &Jx, &Jy);
+      if (p.jacobian_landmark) sensor.predict(at.head<3>(), *p.jacobian_landmark, &Jx, &Jy);
+      if (invariant && !fixed) Jx.col(2) = invariant::anchoredHeadingColumn(Jy, mu0.head<2>(), mu0.segment<2>(l));
+      Vec2 nu = sensor.residual(p.z->z, zhat);
+      if (!fixed) nu += Jx * delta.head<3>() + Jy * delta.segment<2>(l);
+      const Mat2 Z_inv = sensor.noise(*p.z).inverse();
+      const Eigen::Matrix<double, 3, 2> JxZ = Jx.transpose() * Z_inv;
+      const Mat2 JyZ = Jy.transpose() * Z_inv;
+      H_.topLeftCorner<3, 3>() += JxZ * Jx;
+      H_.block<3, 2>(0, l) += JxZ * Jy;
+      H_.block<2, 3>(l, 0) += JyZ * Jx;
+      H_.block<2, 2>(l, l) += JyZ * Jy;
+      g.head<3>() += JxZ * nu;
+      g.segment<2>(l) += JyZ * nu;
+    }
+    const Eigen::LLT<Eigen::MatrixXd> llt(H_);
+    if (llt.info() != Eigen::Success) throw NumericError("eif: information is not positive definite after an update");
+    delta = llt.solve(g);
+    s = invariant ? invariant::retract(mu0, delta) : Eigen::VectorXd(mu0 + delta);
+  }
+  mu_ = s;
+  if (invariant) invariant::reanchorInformation(H_, invariant::leverArms(mu_) - invariant::leverArms(mu0));
+  b_ = H_ * mu_;
+  llt_valid_ = false;
 }
 
 }  // namespace seif

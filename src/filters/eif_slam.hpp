@@ -54,6 +54,8 @@ class EifSlam final : public SlamFilter {
   /// Deletes slot `slot`'s rows and columns of H, b, mu, the last slot's moving into them.
   void deleteSlot(int slot);
   void applyPlan(std::span<const PlannedObservation> plan, const MeasurementModel& sensor);
+  /// applyPlan() for FilterConfig::iterations > 1 or the invariant linearisation.
+  void applyIterated(std::span<const PlannedObservation> plan, const MeasurementModel& sensor);
   const Eigen::LLT<Eigen::MatrixXd>& factor() const;
 
   FilterConfig config_;

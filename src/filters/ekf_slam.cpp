@@ -2,6 +2,7 @@
 #include <seif/core/errors.hpp>
 #include "filters/ekf_slam.hpp"
 #include "filters/information_ops.hpp"
+#include "filters/invariant.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -141,38 +142,61 @@ void EkfSlam::applyPlan(std::span<const PlannedObservation> plan, const Measurem
   const Eigen::Index m = 2 * static_cast<Eigen::Index>(updates.size());
   Eigen::MatrixXd PJt(n, m);  // Sigma J^T, using J's sparsity
   Eigen::VectorXd nu(m);
-  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(m, m);
+  Eigen::MatrixXd S(m, m);
+  Eigen::MatrixXd K;
   std::vector<Mat23> Jx(updates.size());
   std::vector<Mat2> Jy(updates.size());
   std::vector<Eigen::Index> li(updates.size());
-  const Pose2 x = mu_.head<3>();
-  for (std::size_t k = 0; k < updates.size(); ++k) {
-    const PlannedObservation& p = *updates[k];
-    li[k] = StateLayout::landmark(p.slot);
-    const Vec2 zhat = sensor.predict(x, mu_.segment<2>(li[k]), &Jx[k], &Jy[k]);
-    if (p.jacobian_landmark) sensor.predict(x, *p.jacobian_landmark, &Jx[k], &Jy[k]);
-    nu.segment<2>(2 * static_cast<Eigen::Index>(k)) = sensor.residual(p.z->z, zhat);
-    PJt.middleCols<2>(2 * static_cast<Eigen::Index>(k)) =
-        sigma_.leftCols<3>() * Jx[k].transpose() + sigma_.middleCols<2>(li[k]) * Jy[k].transpose();
+  // The iterated EKF (Gauss-Newton on the prior and these observations): iteration i
+  // linearises at s_i = mu0 + delta_i (invariant: the retraction of delta_i) and solves
+  // delta_{i+1} = K_i (z - h(s_i) + J_i delta_i), with Sigma the prior's throughout.
+  const bool invariant = config_.linearization == Linearization::Invariant;
+  const Eigen::VectorXd mu0 = mu_;
+  Eigen::VectorXd delta, s = mu0;
+  for (int it = 0; it < config_.iterations; ++it) {
+    const Pose2 x = s.head<3>();
+    for (std::size_t k = 0; k < updates.size(); ++k) {
+      const PlannedObservation& p = *updates[k];
+      const auto r = 2 * static_cast<Eigen::Index>(k);
+      li[k] = StateLayout::landmark(p.slot);
+      const Vec2 zhat = sensor.predict(x, s.segment<2>(li[k]), &Jx[k], &Jy[k]);
+      if (p.jacobian_landmark) sensor.predict(x, *p.jacobian_landmark, &Jx[k], &Jy[k]);
+      if (invariant && it > 0) {  // the lever arm at the anchors (the prior mean)
+        Jx[k].col(2) = invariant::anchoredHeadingColumn(Jy[k], mu0.head<2>(), mu0.segment<2>(li[k]));
+      }
+      nu.segment<2>(r) = sensor.residual(p.z->z, zhat);
+      if (it > 0) nu.segment<2>(r) += Jx[k] * delta.head<3>() + Jy[k] * delta.segment<2>(li[k]);
+      PJt.middleCols<2>(r) = sigma_.leftCols<3>() * Jx[k].transpose() + sigma_.middleCols<2>(li[k]) * Jy[k].transpose();
+    }
+    S.setZero();
+    for (std::size_t k = 0; k < updates.size(); ++k) {
+      // S = J Sigma J^T + R, row block k = Jx_k (Sigma J^T)_x + Jy_k (Sigma J^T)_l
+      S.middleRows<2>(2 * static_cast<Eigen::Index>(k)) =
+          Jx[k] * PJt.topRows<3>() + Jy[k] * PJt.middleRows<2>(li[k]);
+      S.block<2, 2>(2 * static_cast<Eigen::Index>(k), 2 * static_cast<Eigen::Index>(k)) += sensor.noise(*updates[k]->z);
+    }
+    S = (0.5 * (S + S.transpose())).eval();
+    Eigen::LLT<Eigen::MatrixXd> llt(S);
+    if (llt.info() != Eigen::Success) {
+      std::ostringstream msg;
+      msg << "ekf: innovation covariance is not positive definite (landmark "
+          << updates.front()->z->landmark << ")";
+      throw NumericError(msg.str());
+    }
+    K = llt.solve(PJt.transpose()).transpose();  // n x m
+    if (it + 1 < config_.iterations) {
+      delta = K * nu;
+      s = invariant ? invariant::retract(mu0, delta) : Eigen::VectorXd(mu0 + delta);
+    }
   }
-  for (std::size_t k = 0; k < updates.size(); ++k) {
-    // S = J Sigma J^T + R, row block k = Jx_k (Sigma J^T)_x + Jy_k (Sigma J^T)_l
-    S.middleRows<2>(2 * static_cast<Eigen::Index>(k)) =
-        Jx[k] * PJt.topRows<3>() + Jy[k] * PJt.middleRows<2>(li[k]);
-    S.block<2, 2>(2 * static_cast<Eigen::Index>(k), 2 * static_cast<Eigen::Index>(k)) += sensor.noise(*updates[k]->z);
+  if (invariant) {
+    mu_ = invariant::retract(mu0, K * nu);
+  } else {
+    mu_.noalias() += K * nu;
   }
-  S = (0.5 * (S + S.transpose())).eval();
-  Eigen::LLT<Eigen::MatrixXd> llt(S);
-  if (llt.info() != Eigen::Success) {
-    std::ostringstream msg;
-    msg << "ekf: innovation covariance is not positive definite (landmark "
-        << updates.front()->z->landmark << ")";
-    throw NumericError(msg.str());
-  }
-  const Eigen::MatrixXd K = llt.solve(PJt.transpose()).transpose();  // n x m
-  mu_.noalias() += K * nu;
   sigma_.noalias() -= K * PJt.transpose();
   sigma_ = (0.5 * (sigma_ + sigma_.transpose())).eval();
+  if (invariant) invariant::reanchorCovariance(sigma_, invariant::leverArms(mu_) - invariant::leverArms(mu0));
 }
 
 }  // namespace seif

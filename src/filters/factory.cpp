@@ -52,11 +52,15 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 
 // The SEIF's documentation of each option is SeifOptions' (seif_options.hpp); the help
 // here is the one line a flag or a spec error shows.
-const std::array<FilterOption, 11> kOptions = {{
-    {"linearization", kAll, kChoice, "standard|fej", 0, 0,
-     "where Jacobians are evaluated: the newest estimates or the first ones (FEJ)",
+const std::array<FilterOption, 12> kOptions = {{
+    {"linearization", kAll, kChoice, "standard|fej|invariant", 0, 0,
+     "the Jacobians: at the newest estimates, at the first ones (FEJ), or the right-invariant EKF's",
      [](FilterSpec& s, std::string_view v) { s.linearization = parseLinearization(v); },
      [](const FilterSpec& s) { return std::string(linearizationName(s.linearization)); }},
+    {"iterations", kAll, kInteger, "", 1, 20,
+     "Gauss-Newton iterations of each measurement update (1: the EKF's single linearisation)",
+     [](FilterSpec& s, std::string_view v) { s.iterations = static_cast<int>(parseInteger("iterations", v, 1, 20)); },
+     [](const FilterSpec& s) { return std::to_string(s.iterations); }},
     {"sparsify", kSeif, kChoice, "seif|eseif", 0, 0,
      "how the robot's links are kept at `active`: the paper's conditioning (seif) or the ESEIF's "
      "relocalisation from `beta` observations (eseif: nothing conditioned away)",
@@ -132,10 +136,15 @@ std::string canonicalFilterSpec(const FilterSpec& spec) {
 }
 
 FilterSpec parseFilterSpec(std::string_view text, Linearization linearization, const SeifOptions& seif) {
-  FilterSpec spec;
+  FilterSpec defaults;
+  defaults.linearization = linearization;
+  defaults.seif = seif;
+  return parseFilterSpec(text, defaults);
+}
+
+FilterSpec parseFilterSpec(std::string_view text, const FilterSpec& defaults) {
+  FilterSpec spec = defaults;
   spec.text = std::string(text);
-  spec.linearization = linearization;
-  spec.seif = seif;
   const std::size_t colon = text.find(':');
   spec.name = std::string(text.substr(0, colon));
   if (!knownFilter(spec.name)) {
@@ -198,6 +207,7 @@ std::vector<std::string> splitFilterList(std::string_view list) {
 std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& start, const FilterConfig& config) {
   FilterConfig c = config;
   c.linearization = spec.linearization;
+  c.iterations = spec.iterations;
   if (spec.name == "ekf") return std::make_unique<EkfSlam>(start, c);
   if (spec.name == "eif") return std::make_unique<EifSlam>(start, c);
   if (spec.name == "seif") return std::make_unique<SeifSlam>(start, c, spec.seif);
@@ -207,7 +217,11 @@ std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& star
 
 std::unique_ptr<SlamFilter> makeFilter(std::string_view spec, const Pose2& start,
                                        const FilterConfig& config, const SeifOptions& seif_options) {
-  return makeFilter(parseFilterSpec(spec, config.linearization, seif_options), start, config);
+  FilterSpec defaults;
+  defaults.linearization = config.linearization;
+  defaults.iterations = config.iterations;
+  defaults.seif = seif_options;
+  return makeFilter(parseFilterSpec(spec, defaults), start, config);
 }
 
 }  // namespace seif

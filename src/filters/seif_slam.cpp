@@ -25,6 +25,10 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
   }
   if (options.relax < 0) throw InvalidArgument("seif: --relax must be >= 0");
   if (options.beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
+  if (config.linearization == Linearization::Invariant || config.iterations > 1) {
+    throw InvalidArgument("seif: linearization=invariant and iterations > 1 are not available in the SEIF yet "
+                          "(the EKF and the EIF take them)");
+  }
   order_.reserve(kMaxLocalLandmarks + 1);
   ranking_.reserve(kMaxLocalLandmarks + 1);
   if (options.sparsify == SeifOptions::Sparsify::Eseif) {

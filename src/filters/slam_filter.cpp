@@ -12,11 +12,17 @@ namespace seif {
 Linearization parseLinearization(std::string_view s) {
   if (s == "standard") return Linearization::Standard;
   if (s == "fej") return Linearization::FirstEstimates;
-  throw InvalidArgument("unknown linearization '" + std::string(s) + "' (expected standard or fej)");
+  if (s == "invariant") return Linearization::Invariant;
+  throw InvalidArgument("unknown linearization '" + std::string(s) + "' (expected standard, fej or invariant)");
 }
 
 std::string_view linearizationName(Linearization l) {
-  return l == Linearization::FirstEstimates ? "fej" : "standard";
+  switch (l) {
+    case Linearization::Standard: return "standard";
+    case Linearization::FirstEstimates: return "fej";
+    case Linearization::Invariant: return "invariant";
+  }
+  return "standard";
 }
 
 FilterConfig paperFilterConfig(const NoiseModel& noise) {

@@ -18,6 +18,7 @@ struct FilterSpec {
   std::string text;  ///< the spec as written, e.g. "seif:linearization=fej"
   std::string name;  ///< ekf | eif | seif | batch
   Linearization linearization = Linearization::Standard;
+  int iterations = 1;  ///< FilterConfig::iterations
   SeifOptions seif;
 };
 
@@ -56,6 +57,8 @@ std::string canonicalFilterSpec(const FilterSpec& spec);
 /// or value, a value out of range, a key the filter does not take).
 FilterSpec parseFilterSpec(std::string_view text, Linearization linearization = Linearization::Standard,
                            const SeifOptions& seif = {});
+/// The same with every unset option from `defaults` (its name and text ignored).
+FilterSpec parseFilterSpec(std::string_view text, const FilterSpec& defaults);
 
 /// Splits a comma-separated list of specs, "batch,ekf,seif:sparsify=eseif,beta=4": an item
 /// with '=' but no ':' continues the previous spec's options. Throws InvalidArgument

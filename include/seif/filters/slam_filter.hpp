@@ -30,9 +30,15 @@ enum class Linearization {
   /// heading column from the pose predictions, every landmark's Jacobian at its first
   /// estimate, so the linearised system keeps the unobservable directions of the real one.
   FirstEstimates,
+  /// The right-invariant EKF (Barrau & Bonnabel 2015) in standard coordinates
+  /// (algorithm.md, "anchors"): the covariance is anchored at the means and re-anchored
+  /// (P <- M P M^T, M = I + dc e_theta^T; H <- M^-T H M^-1) whenever they move, and a
+  /// correction is applied by the retraction chi = exp(xi) chi_hat. The linearised system
+  /// keeps the three unobservable directions whatever the estimate.
+  Invariant,
 };
 
-/// "standard" | "fej". Throws InvalidArgument naming the valid names.
+/// "standard" | "fej" | "invariant". Throws InvalidArgument naming the valid names.
 Linearization parseLinearization(std::string_view s);
 std::string_view linearizationName(Linearization l);
 
@@ -48,6 +54,10 @@ struct FilterConfig {
   /// Gross-outlier gate in measurement standard deviations (OutlierGate); infinity disables it.
   double outlier_gate = 1000.0;
   Linearization linearization = Linearization::Standard;
+  /// Gauss-Newton iterations of each measurement update (iterated EKF): 1 linearises once;
+  /// N relinearises N - 1 times at the updated mean (a landmark's first sighting stays
+  /// linearised where it initialised the landmark).
+  int iterations = 1;
 };
 
 /// The paper's models with `noise`: VelocityModel(sigma_v, sigma_w, NoiseForm::PerStep) and

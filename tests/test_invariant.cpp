@@ -1,0 +1,212 @@
+// The right-invariant EKF in standard coordinates (Linearization::Invariant,
+// src/filters/invariant.hpp; algorithm.md "anchors") and the iterated update
+// (FilterConfig::iterations): the algebra against dense and numeric references, EKF = EIF,
+// and the unobservable rotation staying unobserved.
+#include "scenario.hpp"
+
+#include "filters/invariant.hpp"
+#include <seif/core/angles.hpp>
+#include <seif/core/errors.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/models/cartesian.hpp>
+#include <seif/models/range_bearing.hpp>
+#include <seif/models/velocity_model.hpp>
+
+#include <Eigen/LU>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace seif {
+namespace {
+
+Eigen::VectorXd randomState(std::mt19937_64& rng, int landmarks) {
+  std::uniform_real_distribution<double> u(-5.0, 5.0);
+  Eigen::VectorXd s(3 + 2 * landmarks);
+  for (Eigen::Index i = 0; i < s.size(); ++i) s(i) = u(rng);
+  s(2) = 0.3 * s(2);
+  return s;
+}
+
+/// T(s) = I + c(s) e_theta^T as a dense matrix.
+Eigen::MatrixXd anchorMatrix(const Eigen::VectorXd& s) {
+  Eigen::MatrixXd T = Eigen::MatrixXd::Identity(s.size(), s.size());
+  T.col(2) += invariant::leverArms(s);
+  return T;
+}
+
+double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return (a - b).norm() / std::max(1e-300, b.norm());
+}
+
+TEST(Invariant, LeftJacobianSeriesMatchesTheClosedFormOnBothSides) {
+  for (double t : {1e-3, 2e-4, 1.0001e-4, 0.9999e-4, 3e-5, 1e-7, 0.0}) {
+    for (double sign : {1.0, -1.0}) {
+      const double x = sign * t;
+      const Mat2 B = invariant::leftJacobian(x);
+      // The closed form in long double where it is accurate enough to compare with.
+      const long double lx = x;
+      const double a = x == 0.0 ? 1.0 : static_cast<double>(std::sin(lx) / lx);
+      const double b = x == 0.0 ? 0.0 : static_cast<double>((1.0L - std::cos(lx)) / lx);
+      EXPECT_NEAR(B(0, 0), a, 1e-15) << x;
+      EXPECT_NEAR(B(1, 1), a, 1e-15) << x;
+      EXPECT_NEAR(B(1, 0), b, 1e-12 * std::max(1.0, std::abs(b)) + 1e-17) << x;
+      EXPECT_NEAR(B(0, 1), -b, 1e-12 * std::max(1.0, std::abs(b)) + 1e-17) << x;
+    }
+  }
+}
+
+TEST(Invariant, RetractionIsAdditionToFirstOrderWithIdentityDerivative) {
+  std::mt19937_64 rng(3);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::VectorXd s = randomState(rng, 4);
+    const Eigen::VectorXd d = randomState(rng, 4) * 0.1;
+    // Second-order error: halving the step quarters it.
+    const double e1 = (invariant::retract(s, 1e-3 * d) - (s + 1e-3 * d)).norm();
+    const double e2 = (invariant::retract(s, 0.5e-3 * d) - (s + 0.5e-3 * d)).norm();
+    EXPECT_NEAR(e1 / e2, 4.0, 0.05);
+    // d retract / d delta at 0 = I, by central differences.
+    Eigen::MatrixXd D(s.size(), s.size());
+    for (Eigen::Index i = 0; i < s.size(); ++i) {
+      const Eigen::VectorXd e = 1e-6 * Eigen::VectorXd::Unit(s.size(), i);
+      D.col(i) = (invariant::retract(s, e) - invariant::retract(s, -e)) / 2e-6;
+    }
+    EXPECT_LT((D - Eigen::MatrixXd::Identity(s.size(), s.size())).norm(), 1e-7);
+  }
+}
+
+TEST(Invariant, RetractionIsTheGroupExponential) {
+  // exp(xi) chi_hat for the robot and a landmark, composed as 3x3 homogeneous matrices:
+  // exp(xi) = [[Rot(xi_t), B(xi_t) xi_p], [0, 1]] (the SE(2) exponential), applied to
+  // [[R, p], [0, 1]] and to the point [l; 1] (sharing the rotation: SE_{1+n}(2)).
+  std::mt19937_64 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::VectorXd s = randomState(rng, 1);
+    const Eigen::VectorXd delta = randomState(rng, 1) * 0.3;
+    const Eigen::VectorXd out = invariant::retract(s, delta);
+    const double t = delta(2);
+    const Vec2 Jp(-s(1), s(0)), Jl(-s(4), s(3));
+    const Vec2 xi_p = delta.head<2>() - t * Jp, xi_l = delta.segment<2>(3) - t * Jl;
+    // The exponential by its power series (independent of the closed form).
+    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+    A(0, 1) = -t;
+    A(1, 0) = t;
+    Eigen::Matrix3d Ap = A, Al = A;
+    Ap.block<2, 1>(0, 2) = xi_p;
+    Al.block<2, 1>(0, 2) = xi_l;
+    auto expm = [](const Eigen::Matrix3d& X) {
+      Eigen::Matrix3d sum = Eigen::Matrix3d::Identity(), term = Eigen::Matrix3d::Identity();
+      for (int k = 1; k < 40; ++k) {
+        term = (term * X / k).eval();
+        sum += term;
+      }
+      return sum;
+    };
+    const Eigen::Vector3d p = expm(Ap) * Eigen::Vector3d(s(0), s(1), 1.0);
+    const Eigen::Vector3d l = expm(Al) * Eigen::Vector3d(s(3), s(4), 1.0);
+    EXPECT_LT((out.head<2>() - p.head<2>()).norm(), 1e-12);
+    EXPECT_LT((out.segment<2>(3) - l.head<2>()).norm(), 1e-12);
+    EXPECT_DOUBLE_EQ(out(2), s(2) + t);
+  }
+}
+
+TEST(Invariant, ReanchoringIsTNewTimesTOldInverse) {
+  std::mt19937_64 rng(7);
+  const Eigen::VectorXd a = randomState(rng, 3), b = randomState(rng, 3);
+  const Eigen::MatrixXd M = anchorMatrix(b) * anchorMatrix(a).inverse();
+  const Eigen::VectorXd dc = invariant::leverArms(b) - invariant::leverArms(a);
+  Eigen::MatrixXd X = Eigen::MatrixXd::Random(a.size(), a.size());
+  const Eigen::MatrixXd P0 = X * X.transpose() + Eigen::MatrixXd::Identity(a.size(), a.size());
+  Eigen::MatrixXd P = P0;
+  invariant::reanchorCovariance(P, dc);
+  EXPECT_LT(relDiff(P, M * P0 * M.transpose()), 1e-13);
+  Eigen::MatrixXd H = P0.inverse(), H0 = H;
+  invariant::reanchorInformation(H, dc);
+  EXPECT_LT(relDiff(H, M.inverse().transpose() * H0 * M.inverse()), 1e-12);
+  EXPECT_LT(relDiff(H, P.inverse()), 1e-9);  // the same re-anchoring in either form
+}
+
+TEST(Invariant, TheStandardMotionJacobianIsTheRatioOfAnchors) {
+  // T(s_{k+1}) T(s_k)^-1 = the standard motion Jacobian: the invariant EKF propagates like
+  // the standard one (algorithm.md).
+  const VelocityModel model(0.05, 0.02, NoiseForm::PerStep);
+  std::mt19937_64 rng(9);
+  for (int trial = 0; trial < 10; ++trial) {
+    const Eigen::VectorXd s = randomState(rng, 2);
+    const MotionIncrement m = model.linearize(Pose2(s.head<3>()), VelocityControl{0.7, 0.3, 0.5});
+    Eigen::VectorXd next = s;
+    next.head<3>() += m.delta;
+    Eigen::MatrixXd F = Eigen::MatrixXd::Identity(s.size(), s.size());
+    F.topLeftCorner<3, 3>() += m.J_delta_x;
+    EXPECT_LT((anchorMatrix(next) * anchorMatrix(s).inverse() - F).norm(), 1e-12);
+  }
+}
+
+TEST(Invariant, TheAnchoredHeadingColumnIsTheModelsAtTheAnchors) {
+  const RangeBearingModel rb(0.05, 0.02, Pose2(0.3, -0.1, 0.2));  // a mounted sensor
+  const CartesianModel cart(Mat2(Vec2(0.01, 0.02).asDiagonal()), Pose2(0.1, 0.2, -0.4));
+  std::mt19937_64 rng(11);
+  for (const MeasurementModel* sensor : {static_cast<const MeasurementModel*>(&rb), static_cast<const MeasurementModel*>(&cart)}) {
+    for (int trial = 0; trial < 10; ++trial) {
+      const Eigen::VectorXd s = randomState(rng, 1);
+      Mat23 Jx;
+      Mat2 Jy;
+      sensor->predict(Pose2(s.head<3>()), s.segment<2>(3), &Jx, &Jy);
+      EXPECT_LT((invariant::anchoredHeadingColumn(Jy, s.head<2>(), s.segment<2>(3)) - Jx.col(2)).norm(), 1e-12)
+          << sensor->describe();
+    }
+  }
+}
+
+TEST(Invariant, EkfEqualsEifWithEachLinearisationAndIterations) {
+  const test::Scenario s = test::makeScenario(21, 12, 60);
+  for (const char* options : {"linearization=invariant", "linearization=invariant,iterations=3", "iterations=2",
+                              "linearization=fej,iterations=2"}) {
+    auto ekf = makeFilter(std::string("ekf:") + options, s.start, test::configFor(s));
+    auto eif = makeFilter(std::string("eif:") + options, s.start, test::configFor(s));
+    for (const Step& step : s.steps) {
+      ekf->step(step.u, step.observations);
+      eif->step(step.u, step.observations);
+    }
+    ASSERT_EQ(ekf->landmarkIds(), eif->landmarkIds()) << options;
+    EXPECT_LT(relDiff(eif->mean(), ekf->mean()), 1e-9) << options;
+    EXPECT_LT(relDiff(eif->covariance(), ekf->covariance()), 1e-9) << options;
+  }
+}
+
+TEST(Invariant, TheSeifRefusesWhatItDoesNotImplementYet) {
+  const test::Scenario s = test::makeScenario(1, 4, 4);
+  EXPECT_THROW(makeFilter("seif:linearization=invariant", s.start, test::configFor(s)), InvalidArgument);
+  EXPECT_THROW(makeFilter("seif:iterations=2", s.start, test::configFor(s)), InvalidArgument);
+}
+
+/// The information the filter holds about rotating the whole map about the origin at its
+/// current estimate (n = (J p, 1, J l_1, ...), normalised), with a weak prior on the start.
+double rotationInformation(const std::string& spec) {
+  const test::Scenario s = test::makeScenario(4, 15, 150);
+  FilterConfig config = test::configFor(s);
+  config.initial_pose_sigma = Vec3(10.0, 10.0, 10.0);
+  auto f = makeFilter(spec, s.start, config);
+  for (const Step& step : s.steps) f->step(step.u, step.observations);
+  Eigen::VectorXd n = invariant::leverArms(f->mean());
+  n(2) = 1.0;
+  n.normalize();
+  return n.dot(f->information() * n);
+}
+
+TEST(Invariant, TheGlobalRotationStaysUnobservable) {
+  // The prior's information on the rotation is at most 1/10^2 per unit of |n|^2 (the start
+  // pose's): what the filter holds beyond it is spurious.
+  const double standard = rotationInformation("eif");
+  const double inv = rotationInformation("eif:linearization=invariant");
+  const double inv_iterated = rotationInformation("eif:linearization=invariant,iterations=2");
+  std::printf("information on the global rotation: standard %.4g, invariant %.4g, iterated %.4g (prior <= 0.01)\n",
+              standard, inv, inv_iterated);
+  EXPECT_LT(inv, 0.011);
+  EXPECT_LT(inv_iterated, 0.011);
+  EXPECT_GT(standard, 100.0 * inv);
+}
+
+}  // namespace
+}  // namespace seif
