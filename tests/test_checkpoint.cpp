@@ -132,7 +132,11 @@ INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
                                            "seif:relax-order=random", "ekf:linearization=fej",
                                            "eif:linearization=fej", "seif:linearization=fej",
                                            "seif:deactivate=oldest,active=4", "seif:mean=exact",
-                                           "seif:recovery=after-update,covariance=local"));
+                                           "seif:recovery=after-update,covariance=local",
+                                           "ekf:linearization=invariant,iterations=2",
+                                           "eif:linearization=invariant,iterations=2",
+                                           "seif:linearization=invariant,reanchor=0.01",
+                                           "seif:linearization=invariant,sparsify=eseif"));
 
 TEST(Checkpoint, RandomOrderDependsOnTheSavedEngine) {
   // The resume test can fail: the same checkpoint with the random engine restarted from

@@ -33,6 +33,7 @@ std::vector<std::string> valuesOf(const FilterOption& o) {
       out = {std::to_string(o.min), std::to_string(o.max), std::to_string(o.min + (o.max - o.min) / 2)};
       break;
     case FilterOption::Kind::Seed: out = {"0", "18446744073709551615", "12345"}; break;
+    case FilterOption::Kind::Length: out = {"0", "0.005", "2.5"}; break;
   }
   return out;
 }
@@ -87,7 +88,7 @@ TEST(FilterOptions, TheCanonicalSpecParsesBackToTheSameFilter) {
 
 TEST(FilterOptions, BadValuesAndForeignKeysAreRefusedByName) {
   for (const char* bad : {"seif:active=0", "seif:active=40", "seif:beta=1", "seif:relax=-1", "seif:seed=-1",
-                          "seif:seed=18446744073709551616", "seif:mean=fast", "seif:active=4.5", "ekf:active=4",
+                          "seif:seed=18446744073709551616", "seif:mean=fast", "seif:reanchor=-1", "seif:reanchor=nan", "seif:active=4.5", "ekf:active=4",
                           "batch:linearization=fej", "eif:beta=3", "seif:colour=red"}) {
     try {
       seif::parseFilterSpec(bad);

@@ -151,6 +151,13 @@ void SeifFlags::add(CLI::App& cmd) {
       }
       case FilterOption::Kind::Integer: flag->transform(integerIn(o.min, o.max)); break;
       case FilterOption::Kind::Seed: flag->transform(seedValue()); break;
+      case FilterOption::Kind::Length:
+        flag->check([](const std::string& v) -> std::string {
+          double d = 0.0;
+          if (!CLI::detail::lexical_cast(v, d) || !std::isfinite(d) || d < 0.0) return "must be finite and >= 0, found " + v;
+          return {};
+        });
+        break;
     }
     flag->capture_default_str();
   }

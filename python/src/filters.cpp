@@ -64,9 +64,11 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("sparsify", &SeifOptions::sparsify, "seif (the paper's conditioning) or eseif")
       .def_readwrite("covariance", &SeifOptions::covariance, "exact or local marginal covariances")
       .def_readwrite("beta", &SeifOptions::beta, "ESEIF: landmarks whose observations relocalise the robot")
+      .def_readwrite("reanchor", &SeifOptions::reanchor,
+                     "linearization=invariant: re-anchor an observed landmark whose mean moved more than this [m]")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta"});
+                          "covariance", "beta", "reanchor"});
       });
 }
 

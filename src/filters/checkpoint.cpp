@@ -75,6 +75,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.u64(static_cast<std::uint64_t>(o.sparsify));
   out.u64(static_cast<std::uint64_t>(o.covariance));
   out.i64(o.beta);
+  out.f64(o.reanchor);
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -91,6 +92,10 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   o.sparsify = static_cast<SeifOptions::Sparsify>(in.u64Max("sparsify", 1));
   o.covariance = static_cast<SeifOptions::Covariance>(in.u64Max("covariance", 1));
   o.beta = static_cast<int>(in.i64In("beta", 2, kIntMax));
+  if (in.version() >= 2) {
+    o.reanchor = in.f64("reanchor");
+    if (!(o.reanchor >= 0.0) || !std::isfinite(o.reanchor)) in.fail("reanchor must be finite and >= 0");
+  }
   return o;
 }
 

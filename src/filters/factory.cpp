@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <charconv>
+#include <cmath>
 #include <limits>
 #include <string>
 
@@ -34,6 +35,22 @@ std::int64_t parseInteger(std::string_view key, std::string_view value, std::int
   return v;
 }
 
+double parseLength(std::string_view key, std::string_view value) {
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
+  if (ec != std::errc() || end != value.data() + value.size() || !std::isfinite(v) || v < 0.0) {
+    throw InvalidArgument(std::string(key) + "=" + std::string(value) + " is not a finite length >= 0");
+  }
+  return v;
+}
+
+/// Shortest text that parses back to v.
+std::string formatLength(double v) {
+  char buf[32];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, ec == std::errc() ? end : buf);
+}
+
 std::uint64_t parseSeed(std::string_view value) {
   std::uint64_t v = 0;
   const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
@@ -52,7 +69,7 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 
 // The SEIF's documentation of each option is SeifOptions' (seif_options.hpp); the help
 // here is the one line a flag or a spec error shows.
-const std::array<FilterOption, 12> kOptions = {{
+const std::array<FilterOption, 13> kOptions = {{
     {"linearization", kAll, kChoice, "standard|fej|invariant", 0, 0,
      "the Jacobians: at the newest estimates, at the first ones (FEJ), or the right-invariant EKF's",
      [](FilterSpec& s, std::string_view v) { s.linearization = parseLinearization(v); },
@@ -103,6 +120,10 @@ const std::array<FilterOption, 12> kOptions = {{
      "per changed H) or local (the Markov blanket's, constant time, for display)",
      [](FilterSpec& s, std::string_view v) { s.seif.covariance = SeifOptions::parseCovariance(v); },
      [](const FilterSpec& s) { return std::string(optionName(s.seif.covariance)); }},
+    {"reanchor", kSeif, Opt::Kind::Length, "", 0, 0,
+     "linearization=invariant: re-anchor an observed landmark whose mean moved more than this [m]",
+     [](FilterSpec& s, std::string_view v) { s.seif.reanchor = parseLength("reanchor", v); },
+     [](const FilterSpec& s) { return formatLength(s.seif.reanchor); }},
     {"seed", kSeif, Opt::Kind::Seed, "", 0, 0, "seed of the random choice of relaxed landmarks",
      [](FilterSpec& s, std::string_view v) { s.seif.seed = parseSeed(v); },
      [](const FilterSpec& s) { return std::to_string(s.seif.seed); }},

@@ -63,13 +63,20 @@ void marginalizeRobot(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd>
 /// With `jacobian_landmark` (first-estimates Jacobians, Huang et al. 2010, the FEJ-EKF) J is
 /// evaluated at (x, jacobian_landmark) instead, while zhat = h(x, y) and the mean in
 /// J mu stay the current ones: db = J^T Z^-1 (z - h(x, y) + J [x; y]).
+/// With `anchors` (Linearization::Invariant) J_x's heading column is the lever arm at the
+/// positions H is anchored at, -J_y J (a_l - a_p) (invariant.hpp), not at (x, y).
 struct MeasurementInformation {
   Eigen::Matrix<double, 5, 5> H;
   Eigen::Matrix<double, 5, 1> b;
 };
+struct Anchors {
+  Vec2 robot;
+  Vec2 landmark;
+};
 MeasurementInformation measurementInformation(const MeasurementModel& sensor, const Pose2& x,
                                               const Vec2& y, const Observation& z, const Mat2& Z_inv,
-                                              const std::optional<Vec2>& jacobian_landmark = std::nullopt);
+                                              const std::optional<Vec2>& jacobian_landmark = std::nullopt,
+                                              const std::optional<Anchors>& anchors = std::nullopt);
 
 /// The Local marginal (SlamFilter::marginal, MarginalMode::Local): the joint covariance of
 /// `vars` (-1 the robot, else landmark slots; in that order in the result) read off the

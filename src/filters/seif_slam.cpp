@@ -8,6 +8,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace seif {
 
@@ -25,9 +26,11 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
   }
   if (options.relax < 0) throw InvalidArgument("seif: --relax must be >= 0");
   if (options.beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
-  if (config.linearization == Linearization::Invariant || config.iterations > 1) {
-    throw InvalidArgument("seif: linearization=invariant and iterations > 1 are not available in the SEIF yet "
-                          "(the EKF and the EIF take them)");
+  if (config.iterations > 1) {
+    throw InvalidArgument("seif: iterations > 1 is not available in the SEIF yet (the EKF and the EIF take it)");
+  }
+  if (!(options.reanchor >= 0.0) || !std::isfinite(options.reanchor)) {
+    throw InvalidArgument("seif: reanchor must be finite and >= 0");
   }
   order_.reserve(kMaxLocalLandmarks + 1);
   ranking_.reserve(kMaxLocalLandmarks + 1);
@@ -57,6 +60,7 @@ void SeifSlam::motionUpdate(const MotionIncrement& increment) {
   informationMotionUpdate(store_.localH(), store_.localB(), store_.localMean(), m.delta, m.J_delta_x, m.U,
                           workspace_);
   store_.scatter();
+  store_.moveRobotAnchor(m.delta.head<2>());  // T(a + d) T(a)^-1 is the standard G (invariant.hpp)
   invalidateFactor();
 }
 
@@ -69,10 +73,20 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   const Pose2 x = store_.robotMean();
   const std::span<const PlannedObservation> plan =
       book_.plan(observations, sensor, x, [&](int slot) { return store_.node(slot).mu; });
+  // Invariant: H re-anchored at the robot's mean, and at an observed landmark's once it
+  // has moved more than options.reanchor; the Jacobians' heading lever arm at the anchors.
+  const bool invariant = config_.linearization == Linearization::Invariant;
+  if (invariant) store_.reanchorRobot();
   for (const PlannedObservation& p : plan) {
     if (p.first) store_.addLandmark(p.z->landmark, p.initial);
+    std::optional<Anchors> anchors;
+    if (invariant) {
+      reanchorIfMoved(p.slot);
+      anchors = Anchors{store_.robotAnchor(), store_.node(p.slot).anchor};
+    }
     const MeasurementInformation info = measurementInformation(sensor, x, store_.node(p.slot).mu, *p.z,
-                                                               sensor.noise(*p.z).inverse(), p.jacobian_landmark);
+                                                               sensor.noise(*p.z).inverse(), p.jacobian_landmark,
+                                                               anchors);
     store_.addObservation(p.slot, info.H, info.b);  // links it to the robot: active
     // A batch larger than the local block would allow is sparsified as it comes.
     if (static_cast<int>(store_.robotLinks().size()) >= kMaxLocalLandmarks) sparsify();
@@ -101,6 +115,19 @@ void SeifSlam::update(std::span<const Observation> observations, const Measureme
   deactivateSurplus(amortized && book_order);
 }
 
+void SeifSlam::reanchorIfMoved(int slot) {
+  const SeifStore::Node& n = store_.node(slot);
+  if ((n.mu - n.anchor).norm() <= options_.reanchor) return;
+  // Its neighbours join the robot's links: make room first (the local block is bounded).
+  const auto room = [&] {
+    return static_cast<int>(store_.robotLinks().size() + n.links.size()) < kMaxLocalLandmarks - 1;
+  };
+  if (!room()) sparsify();
+  if (!room()) return;  // a landmark with more links than a local block holds keeps its anchor
+  store_.reanchorLandmark(slot);
+  invalidateFactor();
+}
+
 // ---------------------------------------------------------------- removal and merge ---
 
 void SeifSlam::removeLandmark(int id) {
@@ -114,6 +141,9 @@ void SeifSlam::removeLandmark(int id) {
 void SeifSlam::mergeLandmarks(int keep, int drop) {
   const int k = book_.require(keep), d = book_.require(drop);
   if (k == d) throw InvalidArgument("seif: cannot merge landmark " + std::to_string(keep) + " with itself");
+  if (config_.linearization == Linearization::Invariant) {  // one variable: one anchor
+    store_.reanchorLandmark(d, store_.node(k).anchor);
+  }
   store_.mergeLandmarks(k, d);
   book_.removeSlot(d);
   invalidateFactor();

@@ -124,6 +124,10 @@ class SeifSlam final : public SlamFilter {
   /// changed) when the pose does not converge.
   bool relocalizeRobot(const MeasurementModel& sensor);
   void invalidateFactor();
+  /// Linearization::Invariant: re-anchors landmark `slot` when its mean has moved more than
+  /// options.reanchor from its anchor (sparsifying first when its neighbours would
+  /// overflow the local block).
+  void reanchorIfMoved(int slot);
 
   FilterConfig config_;
   LandmarkBook book_;

@@ -114,6 +114,10 @@ bool SeifSlam::partitionObservations(std::span<const Observation> z, const Measu
 bool SeifSlam::relocalizeRobot(const MeasurementModel& sensor) {
   // The robot's mean given z_alpha (re-solved on the block the marginalisation gathers) is
   // the start of a Gauss-Newton fit of the pose to z_beta and the landmarks' means.
+  const bool invariant = config_.linearization == Linearization::Invariant;
+  if (invariant) {  // z_beta's landmarks anchored before the robot leaves (their links move)
+    for (int slot : beta_slots_) reanchorIfMoved(slot);
+  }
   store_.gatherActive();
   store_.solveLocalMean();
   Pose2 x = store_.robotMean();
@@ -143,8 +147,10 @@ bool SeifSlam::relocalizeRobot(const MeasurementModel& sensor) {
   // pose; the robot is then linked to m_beta only.
   for (std::size_t k = 0; k < beta_.size(); ++k) {
     const int slot = beta_slots_[k];
-    const MeasurementInformation info =
-        measurementInformation(sensor, x, store_.node(slot).mu, beta_[k], sensor.noise(beta_[k]).inverse());
+    const std::optional<Anchors> anchors =
+        invariant ? std::optional<Anchors>(Anchors{store_.robotAnchor(), store_.node(slot).anchor}) : std::nullopt;
+    const MeasurementInformation info = measurementInformation(sensor, x, store_.node(slot).mu, beta_[k],
+                                                               sensor.noise(beta_[k]).inverse(), std::nullopt, anchors);
     store_.addObservation(slot, info.H, info.b);
   }
   invalidateFactor();

@@ -29,11 +29,13 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifStore& s) {
   out.fixed(s.H_xx_);
   out.fixed(s.b_x_);
   out.fixed(s.mu_x_);
+  out.fixed(s.robot_anchor_);
   out.count(s.nodes_.size());
   for (const SeifStore::Node& n : s.nodes_) {
     out.fixed(n.H);
     out.fixed(n.b);
     out.fixed(n.mu);
+    out.fixed(n.anchor);
     out.i64(n.active);
     out.count(n.links.size());
     for (const SeifStore::Link& l : n.links) {
@@ -61,9 +63,14 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
   in.fixed("robot information", s.H_xx_, true);
   in.fixed("robot information vector", s.b_x_, true);
   in.fixed("robot mean", s.mu_x_, true);
+  if (in.version() >= 2) {
+    in.fixed("robot anchor", s.robot_anchor_, true);
+  } else {
+    s.robot_anchor_ = s.mu_x_.head<2>();
+  }
   // Information is positive on its diagonal (deactivation ranks links by it, sqrt'd).
   if (!(s.H_xx_.diagonal().minCoeff() > 0.0)) in.fail("robot information is not positive on its diagonal");
-  const std::size_t nodes = in.count("node count", 3 * 9 + 9 + 9);
+  const std::size_t nodes = in.count("node count", (in.version() >= 2 ? 4 : 3) * 9 + 9 + 9);
   if (nodes != static_cast<std::size_t>(size)) {
     in.fail(std::to_string(nodes) + " nodes for " + std::to_string(size) + " landmarks");
   }
@@ -76,6 +83,11 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
     if (!(n.H.diagonal().minCoeff() > 0.0)) in.fail("landmark information is not positive on its diagonal");
     in.fixed("landmark information vector", n.b, true);
     in.fixed("landmark mean", n.mu, true);
+    if (in.version() >= 2) {
+      in.fixed("landmark anchor", n.anchor, true);
+    } else {
+      n.anchor = n.mu;
+    }
     n.active = static_cast<int>(in.i64In("active position", -1, kMaxLocalLandmarks - 1));
     const std::size_t links = in.count("link count", kLinkBytes);
     n.links.reserve(links);

@@ -9,7 +9,8 @@
 
 namespace seif {
 
-SeifStore::SeifStore(const Mat3& H_xx, const Vec3& mu_x) : H_xx_(H_xx), b_x_(H_xx * mu_x), mu_x_(mu_x) {
+SeifStore::SeifStore(const Mat3& H_xx, const Vec3& mu_x)
+    : H_xx_(H_xx), b_x_(H_xx * mu_x), mu_x_(mu_x), robot_anchor_(mu_x.head<2>()) {
   robot_links_.reserve(kMaxLocalLandmarks + 1);
   gathered_.reserve(kMaxLocalLandmarks + 1);
 }
@@ -45,7 +46,64 @@ int SeifStore::addLandmark(int id, const Vec2& mu) {
   ids_.push_back(id);
   nodes_.emplace_back();
   nodes_.back().mu = mu;
+  nodes_.back().anchor = mu;
   return slot;
+}
+
+int SeifStore::activate(int slot) {
+  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  if (node.active < 0) {
+    node.active = static_cast<int>(robot_links_.size());
+    robot_links_.push_back({slot, Mat32::Zero(), step_});
+    max_landmark_links_ = std::max(max_landmark_links_, node.links.size() + 1);
+  }
+  return node.active;
+}
+
+namespace {
+Vec2 quarterTurn(const Vec2& v) { return Vec2(-v.y(), v.x()); }
+}  // namespace
+
+void SeifStore::reanchorRobot() {
+  // invariant.hpp: dc = J (mu_p - a_p) on the robot's position rows; q = H dc.
+  const Vec2 dc = quarterTurn(mu_x_.head<2>() - robot_anchor_);
+  robot_anchor_ = mu_x_.head<2>();
+  if (dc.isZero(0.0)) return;
+  const Vec3 q_x = H_xx_.leftCols<2>() * dc;
+  reanchor_q_.clear();
+  for (const RobotLink& l : robot_links_) reanchor_q_.emplace_back(l.slot, l.H.topRows<2>().transpose() * dc);
+  applyReanchor(q_x, dc.dot(q_x.head<2>()));
+}
+
+void SeifStore::reanchorLandmark(int slot, const Vec2& to) {
+  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  const Vec2 dc = quarterTurn(to - node.anchor);
+  node.anchor = to;
+  if (dc.isZero(0.0)) return;
+  const Vec3 q_x = node.active >= 0 ? Vec3(robot_links_[static_cast<std::size_t>(node.active)].H * dc) : Vec3::Zero();
+  reanchor_q_.clear();
+  reanchor_q_.emplace_back(slot, node.H * dc);
+  for (const Link& k : node.links) reanchor_q_.emplace_back(k.slot, k.H.transpose() * dc);  // H_{k,l} dc
+  applyReanchor(q_x, dc.dot(reanchor_q_.front().second));
+}
+
+void SeifStore::applyReanchor(const Vec3& q_x, double a) {
+  // invariant.hpp: H' = H - q e_t^T - e_t q^T + a e_t e_t^T and b' = H' mu (the mean stays):
+  // b' = b - mu_t q - e_t (q^T mu - a mu_t). Only the robot's heading row and column change.
+  const double mu_t = mu_x_(2);
+  double q_mu = q_x.dot(mu_x_);
+  for (const auto& [slot, q] : reanchor_q_) q_mu += q.dot(nodes_[static_cast<std::size_t>(slot)].mu);
+  H_xx_.col(2) -= q_x;
+  H_xx_.row(2) -= q_x.transpose();
+  H_xx_(2, 2) += a;
+  b_x_ -= mu_t * q_x;
+  b_x_(2) -= q_mu - a * mu_t;
+  for (const auto& [slot, q] : reanchor_q_) {
+    RobotLink& l = robot_links_[static_cast<std::size_t>(activate(slot))];
+    l.H.row(2) -= q.transpose();
+    nodes_[static_cast<std::size_t>(slot)].b -= mu_t * q;
+  }
+  blocks_touched_ += 1 + reanchor_q_.size();
 }
 
 void SeifStore::addObservation(int slot, const Eigen::Matrix<double, 5, 5>& H,
@@ -55,12 +113,7 @@ void SeifStore::addObservation(int slot, const Eigen::Matrix<double, 5, 5>& H,
   b_x_ += b.head<3>();
   node.H += H.bottomRightCorner<2, 2>();
   node.b += b.tail<2>();
-  if (node.active < 0) {  // observing a passive landmark activates it
-    node.active = static_cast<int>(robot_links_.size());
-    robot_links_.push_back({slot, Mat32::Zero(), step_});
-    max_landmark_links_ = std::max(max_landmark_links_, node.links.size() + 1);
-  }
-  RobotLink& l = robot_links_[static_cast<std::size_t>(node.active)];
+  RobotLink& l = robot_links_[static_cast<std::size_t>(activate(slot))];  // observing activates
   l.H += H.topRightCorner<3, 2>();
   l.last_seen = step_;
   blocks_touched_ += 3;
@@ -178,6 +231,7 @@ void SeifStore::detachRobot(const Vec3& mu_x) {
   H_xx_.setZero();
   b_x_.setZero();
   mu_x_ = mu_x;
+  robot_anchor_ = mu_x.head<2>();
 }
 
 void SeifStore::setMean(const Eigen::VectorXd& mu) {

@@ -31,6 +31,9 @@ class SeifStore {
     Mat2 H = Mat2::Zero();
     Vec2 b = Vec2::Zero();
     Vec2 mu = Vec2::Zero();
+    /// Where H is anchored for this landmark (Linearization::Invariant; src/filters/invariant.hpp):
+    /// its mean when it entered or was last re-anchored.
+    Vec2 anchor = Vec2::Zero();
     int active = -1;  // position in robotLinks(), or -1 when passive
     std::vector<Link> links;
   };
@@ -107,6 +110,22 @@ class SeifStore {
   /// Sets the whole mean, in the state order.
   void setMean(const Eigen::VectorXd& mu);
 
+  // ---- anchors of the invariant linearisation (src/filters/invariant.hpp)
+  /// The robot position H is anchored at.
+  const Vec2& robotAnchor() const { return robot_anchor_; }
+  /// The robot's motion moved its anchor with its mean (T(a + d) T(a)^-1 is the standard
+  /// motion Jacobian whatever a).
+  void moveRobotAnchor(const Vec2& d) { robot_anchor_ += d; }
+  /// Re-anchors the robot at its mean: H <- M^-T H M^-1, b <- b + (H' - H) mu with
+  /// M = I + J (mu_p - a_p) e_theta^T (invariant.hpp). Touches the robot and its links. O(active).
+  void reanchorRobot();
+  /// The same for landmark `slot` (M = I + J (mu_l - a_l) e_theta^T over its rows): the
+  /// robot's heading row gains the landmark's neighbours, which become active (linked to
+  /// the robot) when they were not. O(links of the landmark).
+  void reanchorLandmark(int slot) { reanchorLandmark(slot, node(slot).mu); }
+  /// Re-anchors landmark `slot` at `to` (a merge anchors two landmarks at one point).
+  void reanchorLandmark(int slot, const Vec2& to);
+
   // ---- the local dense block
   /// Gathers H, b, mu of the robot and the landmarks `slots` (at most kMaxLocalLandmarks),
   /// in that order, into localH(), localB(), localMean(): [x (3), slots[0] (2), ...].
@@ -148,11 +167,17 @@ class SeifStore {
   friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
   Mat2* link(int a, int c);
   void gatherListed();  // gather() of gathered_
+  /// Links landmark `slot` to the robot (activates it) with a zero block; its position.
+  int activate(int slot);
+  /// The re-anchoring of reanchorRobot()/reanchorLandmark(): q = H dc over the variable's
+  /// blanket (q_x on the robot, q_ in reanchor_q_ on landmarks) and a = dc^T H dc.
+  void applyReanchor(const Vec3& q_x, double a);
 
   std::vector<int> ids_;
   Mat3 H_xx_;
   Vec3 b_x_;
   Vec3 mu_x_;
+  Vec2 robot_anchor_;
   std::vector<RobotLink> robot_links_;
   std::vector<Node> nodes_;
   long step_ = 0;
@@ -166,6 +191,7 @@ class SeifStore {
   LocalVector local_b_;
   LocalVector local_mu_;
   LocalVector local_rhs_;
+  std::vector<std::pair<int, Vec2>> reanchor_q_;  // applyReanchor()'s landmark entries
 };
 
 }  // namespace seif

@@ -27,7 +27,7 @@ struct FilterSpec {
 /// object) and Python's names (the key with '_' for '-') all come from.
 struct FilterOption {
   enum class Scope { AllButBatch, Seif };  ///< which filters take it
-  enum class Kind { Choice, Integer, Seed };
+  enum class Kind { Choice, Integer, Seed, Length };  ///< Length: a finite number >= 0 [m]
   std::string_view key;      ///< e.g. "relax-order"
   Scope scope;
   Kind kind;

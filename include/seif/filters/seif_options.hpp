@@ -52,6 +52,11 @@ struct SeifOptions {
   /// never more than `active`. More give a better relocalised pose (docs: the paper's
   /// world's map error is several times smaller with 4 than with 2).
   int beta = 4;
+  /// Linearization::Invariant: an observed landmark whose mean has moved more than this
+  /// [m] from where H is anchored for it is re-anchored before its update (its neighbours
+  /// then link to the robot's heading; algorithm.md, "per-landmark anchors"). 0 re-anchors
+  /// at every observation. The robot is re-anchored at every update.
+  double reanchor = 0.005;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
