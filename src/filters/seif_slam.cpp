@@ -26,9 +26,6 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
   }
   if (options.relax < 0) throw InvalidArgument("seif: --relax must be >= 0");
   if (options.beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
-  if (config.iterations > 1) {
-    throw InvalidArgument("seif: iterations > 1 is not available in the SEIF yet (the EKF and the EIF take it)");
-  }
   if (!(options.reanchor >= 0.0) || !std::isfinite(options.reanchor)) {
     throw InvalidArgument("seif: reanchor must be finite and >= 0");
   }
@@ -77,6 +74,9 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   // has moved more than options.reanchor; the Jacobians' heading lever arm at the anchors.
   const bool invariant = config_.linearization == Linearization::Invariant;
   if (invariant) store_.reanchorRobot();
+  const std::size_t sparsified = sparsifications_;
+  infos_.clear();
+  anchors_.clear();
   for (const PlannedObservation& p : plan) {
     if (p.first) store_.addLandmark(p.z->landmark, p.initial);
     std::optional<Anchors> anchors;
@@ -88,8 +88,28 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
                                                                sensor.noise(*p.z).inverse(), p.jacobian_landmark,
                                                                anchors);
     store_.addObservation(p.slot, info.H, info.b);  // links it to the robot: active
+    infos_.push_back(info);
+    anchors_.push_back(anchors);
     // A batch larger than the local block would allow is sparsified as it comes.
     if (static_cast<int>(store_.robotLinks().size()) >= kMaxLocalLandmarks) sparsify();
+  }
+  // The iterated update (FilterConfig::iterations): relinearise at the local posterior mean
+  // - the robot and the active landmarks solved jointly, the rest held (solveLocalMean) -
+  // replacing each observation's information by the new linearisation's, with the same
+  // anchors; a first sighting keeps the linearisation that initialised its landmark. Not
+  // after a sparsification within the batch (it has conditioned the links the first
+  // linearisation made).
+  for (int it = 1; it < config_.iterations && sparsifications_ == sparsified; ++it) {
+    store_.relaxActive();
+    const Pose2 xi = store_.robotMean();
+    for (std::size_t k = 0; k < plan.size(); ++k) {
+      const PlannedObservation& p = plan[k];
+      if (p.first) continue;
+      store_.addObservation(p.slot, -infos_[k].H, -infos_[k].b);
+      infos_[k] = measurementInformation(sensor, xi, store_.node(p.slot).mu, *p.z, sensor.noise(*p.z).inverse(),
+                                         p.jacobian_landmark, anchors_[k]);
+      store_.addObservation(p.slot, infos_[k].H, infos_[k].b);
+    }
   }
   book_.commit();
 }

@@ -148,6 +148,9 @@ class SeifSlam final : public SlamFilter {
   std::vector<Observation> beta_;   // ESEIF's z_beta
   std::vector<int> beta_slots_;     // their landmarks
   std::vector<unsigned char> roles_;  // per observation of a step: alpha, beta or rejected
+  std::vector<MeasurementInformation> infos_;  // measurementUpdate()'s, for iterations
+  std::vector<std::optional<Anchors>> anchors_;
+  std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
 
   /// The sparse Cholesky factor of H and its selected inverse, built on first use after H
   /// changed: exact means and marginal covariances.

@@ -14,6 +14,7 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first) {
   const int k = static_cast<int>(store_.robotLinks().size());
   const int drop = k - options_.active;
   if (drop <= 0) return;
+  ++sparsifications_;
   if (options_.sparsify == SeifOptions::Sparsify::Eseif) ++eseif_fallbacks_;
   ranking_.clear();
   for (const SeifStore::RobotLink& l : store_.robotLinks()) {
