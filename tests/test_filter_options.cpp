@@ -34,6 +34,7 @@ std::vector<std::string> valuesOf(const FilterOption& o) {
       break;
     case FilterOption::Kind::Seed: out = {"0", "18446744073709551615", "12345"}; break;
     case FilterOption::Kind::Length: out = {"0", "0.005", "2.5"}; break;
+    case FilterOption::Kind::Profile: out = {"consistent"}; break;
   }
   return out;
 }
@@ -54,6 +55,11 @@ TEST(FilterOptions, KeysAreUniqueAndEveryValueRoundTrips) {
     for (const std::string& value : valuesOf(o)) {
       const std::string text = "seif:" + std::string(o.key) + "=" + value;
       const FilterSpec s = seif::parseFilterSpec(text);
+      if (o.kind == FilterOption::Kind::Profile) {  // a shorthand: it sets other keys
+        EXPECT_EQ(allValues(s), allValues(seif::parseFilterSpec("seif:" + std::string(seif::kConsistentProfile))));
+        EXPECT_NE(std::string(o.help).find(seif::kConsistentProfile), std::string::npos) << o.help;
+        continue;
+      }
       EXPECT_EQ(o.get(s), value) << text;
       EXPECT_EQ(allValues(seif::parseFilterSpec(seif::canonicalFilterSpec(s))), allValues(s)) << text;
     }
@@ -79,11 +85,21 @@ TEST(FilterOptions, TheCanonicalSpecParsesBackToTheSameFilter) {
     EXPECT_EQ(seif::canonicalFilterSpec(back), canonical);
     // The canonical spec names every option the filter takes, and no other.
     for (const FilterOption& o : seif::filterOptions()) {
-      EXPECT_EQ(canonical.find(std::string(o.key) + "=") != std::string::npos, seif::takesOption(s.name, o))
-          << canonical << " / " << o.key;
+      const bool listed = seif::takesOption(s.name, o) && o.kind != FilterOption::Kind::Profile;
+      EXPECT_EQ(canonical.find(std::string(o.key) + "=") != std::string::npos, listed) << canonical << " / " << o.key;
     }
   }
   EXPECT_EQ(seif::canonicalFilterSpec(seif::parseFilterSpec("batch")), "batch");
+}
+
+TEST(FilterOptions, AProfileIsOverriddenByTheKeysAfterIt) {
+  const FilterSpec s = seif::parseFilterSpec("seif:profile=consistent,active=8");
+  EXPECT_EQ(s.linearization, seif::Linearization::Invariant);
+  EXPECT_EQ(s.iterations, 2);
+  EXPECT_EQ(s.seif.active, 8);
+  EXPECT_EQ(seif::parseFilterSpec("seif:active=8,profile=consistent").seif.active, 20);
+  EXPECT_THROW(seif::parseFilterSpec("seif:profile=fast"), seif::InvalidArgument);
+  EXPECT_THROW(seif::parseFilterSpec("ekf:profile=consistent"), seif::InvalidArgument);
 }
 
 TEST(FilterOptions, BadValuesAndForeignKeysAreRefusedByName) {
@@ -110,7 +126,7 @@ TEST(FilterOptions, EverySeifOptionIsACliFlagWithTheLibraryDefault) {
   FilterSpec defaults;
   defaults.name = "seif";
   for (const FilterOption& o : seif::filterOptions()) {
-    if (o.scope != FilterOption::Scope::Seif) continue;
+    if (o.scope != FilterOption::Scope::Seif || o.kind == FilterOption::Kind::Profile) continue;
     const std::string flag = "--" + std::string(o.key);
     const std::size_t at = help.out.find(flag + " ");
     ASSERT_NE(at, std::string::npos) << flag << " missing from `seif run --help`";

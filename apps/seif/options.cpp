@@ -134,7 +134,7 @@ void SeifFlags::add(CLI::App& cmd) {
   FilterSpec defaults;
   defaults.name = "seif";
   for (const FilterOption& o : filterOptions()) {
-    if (o.scope != FilterOption::Scope::Seif) continue;
+    if (o.scope != FilterOption::Scope::Seif || o.kind == FilterOption::Kind::Profile) continue;
     std::string& value = values[std::string(o.key)];
     value = o.get(defaults);
     CLI::Option* flag = cmd.add_option("--" + std::string(o.key), value, "SEIF: " + std::string(o.help));
@@ -151,6 +151,7 @@ void SeifFlags::add(CLI::App& cmd) {
       }
       case FilterOption::Kind::Integer: flag->transform(integerIn(o.min, o.max)); break;
       case FilterOption::Kind::Seed: flag->transform(seedValue()); break;
+      case FilterOption::Kind::Profile: break;
       case FilterOption::Kind::Length:
         flag->check([](const std::string& v) -> std::string {
           double d = 0.0;
@@ -178,7 +179,7 @@ std::string filterSpecHelp() {
   for (const FilterOption& o : filterOptions()) {
     std::string& list = o.scope == FilterOption::Scope::Seif ? seif : all;
     list.append(list.empty() ? "" : ", ").append(o.key);
-    if (o.kind == FilterOption::Kind::Choice) list.append("=").append(o.choices);
+    if (o.kind == FilterOption::Kind::Choice || o.kind == FilterOption::Kind::Profile) list.append("=").append(o.choices);
   }
   return "keys: " + all + " (every filter but the batch); for the seif " + seif +
          " (the flags of the same names set the defaults)";

@@ -164,6 +164,7 @@ void bindConfig(py::module_& m) {
           }();
           row["filters"] = o.scope == FilterOption::Scope::Seif ? py::make_tuple("seif") : py::make_tuple("ekf", "eif", "seif");
           row["choices"] = std::string(o.choices);
+          row["profile"] = o.kind == FilterOption::Kind::Profile;
           row["default"] = o.get(seif_defaults);
           row["help"] = std::string(o.help);
           rows.append(row);

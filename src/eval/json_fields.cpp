@@ -16,13 +16,14 @@ nlohmann::json toJson(const SeifOptions& o) {
   spec.seif = o;
   nlohmann::json j = nlohmann::json::object();
   for (const FilterOption& option : filterOptions()) {
-    if (option.scope != FilterOption::Scope::Seif) continue;
+    if (option.scope != FilterOption::Scope::Seif || option.kind == FilterOption::Kind::Profile) continue;
     const std::string value = option.get(spec);
     switch (option.kind) {
       case FilterOption::Kind::Choice: j[std::string(option.key)] = value; break;
       case FilterOption::Kind::Integer: j[std::string(option.key)] = std::stoll(value); break;
       case FilterOption::Kind::Seed: j[std::string(option.key)] = std::stoull(value); break;
       case FilterOption::Kind::Length: j[std::string(option.key)] = std::stod(value); break;
+      case FilterOption::Kind::Profile: break;
     }
   }
   return j;

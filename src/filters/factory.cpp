@@ -69,7 +69,13 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 
 // The SEIF's documentation of each option is SeifOptions' (seif_options.hpp); the help
 // here is the one line a flag or a spec error shows.
-const std::array<FilterOption, 13> kOptions = {{
+void applyProfile(FilterSpec& s, std::string_view v);
+
+const std::array<FilterOption, 14> kOptions = {{
+    {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
+     "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=20 "
+     "(honest covariances in constant time; README)",
+     &applyProfile, [](const FilterSpec&) { return std::string(); }},
     {"linearization", kAll, kChoice, "standard|fej|invariant", 0, 0,
      "the Jacobians: at the newest estimates, at the first ones (FEJ), or the right-invariant EKF's",
      [](FilterSpec& s, std::string_view v) { s.linearization = parseLinearization(v); },
@@ -129,6 +135,20 @@ const std::array<FilterOption, 13> kOptions = {{
      [](const FilterSpec& s) { return std::to_string(s.seif.seed); }},
 }};
 
+void applyProfile(FilterSpec& s, std::string_view v) {
+  if (v != "consistent") throw InvalidArgument("unknown profile '" + std::string(v) + "' (expected consistent)");
+  for (std::string_view rest = kConsistentProfile; !rest.empty();) {
+    const std::size_t comma = rest.find(',');
+    const std::string_view item = rest.substr(0, comma);
+    rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
+    const std::size_t eq = item.find('=');
+    const std::string_view key = item.substr(0, eq);
+    for (const FilterOption& o : kOptions) {
+      if (o.key == key) o.set(s, item.substr(eq + 1));
+    }
+  }
+}
+
 bool knownFilter(std::string_view name) {
   return name == "ekf" || name == "eif" || name == "seif" || name == "batch";
 }
@@ -149,7 +169,7 @@ std::string canonicalFilterSpec(const FilterSpec& spec) {
   std::string out = spec.name;
   char sep = ':';
   for (const FilterOption& o : kOptions) {
-    if (!takesOption(spec.name, o)) continue;
+    if (!takesOption(spec.name, o) || o.kind == FilterOption::Kind::Profile) continue;
     out.append(1, sep).append(o.key).append("=").append(o.get(spec));
     sep = ',';
   }

@@ -27,7 +27,10 @@ struct FilterSpec {
 /// object) and Python's names (the key with '_' for '-') all come from.
 struct FilterOption {
   enum class Scope { AllButBatch, Seif };  ///< which filters take it
-  enum class Kind { Choice, Integer, Seed, Length };  ///< Length: a finite number >= 0 [m]
+  /// Length: a finite number >= 0 [m]. Profile: a spec-only shorthand that sets other
+  /// options (the keys after it in the spec override it); the canonical spec, the flags and
+  /// metrics.json list the options it set, not it.
+  enum class Kind { Choice, Integer, Seed, Length, Profile };
   std::string_view key;      ///< e.g. "relax-order"
   Scope scope;
   Kind kind;
@@ -46,6 +49,10 @@ std::span<const FilterOption> filterOptions();
 
 /// Whether filter `name` (ekf | eif | seif | batch) takes the option.
 bool takesOption(std::string_view name, const FilterOption& option);
+
+/// profile=consistent, the recommended constant-time configuration (README, "Consistent in
+/// constant time"): linearization=invariant, iterations=2, active=20.
+inline constexpr std::string_view kConsistentProfile = "linearization=invariant,iterations=2,active=20";
 
 /// "name:key=value,..." with every option the filter takes, in table order: the exact
 /// configuration a spec ran with, as metrics.json records it; parses back to an equal spec.
