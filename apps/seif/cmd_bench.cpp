@@ -25,7 +25,7 @@ struct BenchArgs {
   double max_seconds = 120.0;
   double max_memory_gb = 4.0;
   bool no_figure = false;
-  SeifFlags seif;
+  FilterFlags options;
 };
 
 void printHeader() {
@@ -72,7 +72,10 @@ void bench(const BenchArgs& args) {
   request.world_seed = args.world_seed;
   request.max_seconds = args.max_seconds;
   request.max_memory_gb = args.max_memory_gb;
-  request.seif = args.seif.resolve();
+  const FilterSpec flags = args.options.resolve();
+  request.seif = flags.seif;
+  request.linearization = flags.linearization;
+  request.iterations = flags.iterations;
 
 #if !defined(NDEBUG)
   std::printf("warning: this seif was built without NDEBUG (a debug build): times are not representative\n");
@@ -139,7 +142,7 @@ void addBenchCommand(CLI::App& app) {
       ->check(positiveFinite())
       ->capture_default_str();
   cmd->add_flag("--no-figure", args->no_figure, "do not render OUT/bench.png");
-  args->seif.add(*cmd);
+  args->options.add(*cmd);
   cmd->callback([args] { bench(*args); });
 }
 

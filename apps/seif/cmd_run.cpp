@@ -18,7 +18,7 @@ struct RunArgs {
   std::string filter = "seif";
   std::string out = "out/run";
   NoiseFlags noise;
-  SeifFlags seif;
+  FilterFlags options;
   double outlier_gate = FilterConfig{}.outlier_gate;
   std::string map_covariance = "exact";
   std::string trajectory_covariance = "off";
@@ -44,7 +44,10 @@ void run(const RunArgs& args) {
   request.dataset_options.robot = args.robot;
   request.filter = args.filter;
   request.outlier_gate = args.outlier_gate;
-  request.seif = args.seif.resolve();
+  const FilterSpec flags = args.options.resolve();
+  request.seif = flags.seif;
+  request.linearization = flags.linearization;
+  request.iterations = flags.iterations;
   request.map_covariances = args.map_covariance == "exact";
   request.trajectory_covariances = args.trajectory_covariance == "on";
   request.checkpoint_every = args.checkpoint_every;
@@ -162,7 +165,7 @@ void addRunCommand(CLI::App& app) {
                   "checkpoint's, the steps it consumed are skipped, and the outputs equal those of\n"
                   "the uninterrupted run");
   args->noise.add(*cmd);
-  args->seif.add(*cmd);
+  args->options.add(*cmd);
   cmd->callback([args] {
     args->command_line = commandLine();
     run(*args);

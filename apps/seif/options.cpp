@@ -130,14 +130,15 @@ CLI::Validator filterSpecs() {
       "SPEC[,SPEC...]");
 }
 
-void SeifFlags::add(CLI::App& cmd) {
+void FilterFlags::add(CLI::App& cmd) {
   FilterSpec defaults;
   defaults.name = "seif";
   for (const FilterOption& o : filterOptions()) {
-    if (o.scope != FilterOption::Scope::Seif || o.kind == FilterOption::Kind::Profile) continue;
+    if (o.kind == FilterOption::Kind::Profile) continue;
     std::string& value = values[std::string(o.key)];
     value = o.get(defaults);
-    CLI::Option* flag = cmd.add_option("--" + std::string(o.key), value, "SEIF: " + std::string(o.help));
+    const std::string scope = o.scope == FilterOption::Scope::Seif ? "SEIF: " : "";
+    CLI::Option* flag = cmd.add_option("--" + std::string(o.key), value, scope + std::string(o.help));
     switch (o.kind) {
       case FilterOption::Kind::Choice: {
         std::vector<std::string> choices;
@@ -164,14 +165,14 @@ void SeifFlags::add(CLI::App& cmd) {
   }
 }
 
-SeifOptions SeifFlags::resolve() const {
+FilterSpec FilterFlags::resolve() const {
   FilterSpec spec;
   spec.name = "seif";
   for (const FilterOption& o : filterOptions()) {
     const auto it = values.find(std::string(o.key));
     if (it != values.end()) o.set(spec, it->second);
   }
-  return spec.seif;
+  return spec;
 }
 
 std::string filterSpecHelp() {

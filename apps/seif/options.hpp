@@ -50,13 +50,14 @@ struct NoiseFlags {
   DatasetOptions resolve() const;
 };
 
-/// The SEIF's options as flags, one per SEIF row of the filter option table
-/// (filterOptions(): --active, --relax, --sparsify, ...), with the library's defaults. A
-/// spec's own keys (--filter seif:active=4) override them.
-struct SeifFlags {
+/// The filters' options as flags, one per row of the filter option table (filterOptions():
+/// --linearization, --iterations, --active, --relax, --sparsify, ...; not the profile), with
+/// the library's defaults. A spec's own keys (--filter seif:active=4) override them.
+struct FilterFlags {
   std::map<std::string, std::string> values;  ///< option key -> value as typed
   void add(CLI::App& cmd);
-  SeifOptions resolve() const;
+  /// The flags as a spec's defaults (name "seif").
+  FilterSpec resolve() const;
 };
 
 /// The keys a filter spec takes, for --filter's help (from filterOptions()).

@@ -82,6 +82,8 @@ void bindRun(py::module_& m) {
       .def_readwrite("filter", &RunRequest::filter, "filter spec, e.g. 'seif:sparsify=eseif'")
       .def_readwrite("outlier_gate", &RunRequest::outlier_gate)
       .def_readwrite("seif", &RunRequest::seif, "SeifOptions (spec options override them)")
+      .def_readwrite("linearization", &RunRequest::linearization, "default linearization (the spec's overrides it)")
+      .def_readwrite("iterations", &RunRequest::iterations, "default iterations (the spec's overrides it)")
       .def_readwrite("map_covariances", &RunRequest::map_covariances)
       .def_readwrite("trajectory_covariances", &RunRequest::trajectory_covariances)
       .def_readwrite("command_line", &RunRequest::command_line, "recorded in metrics.json")
@@ -395,7 +397,9 @@ void bindBench(py::module_& m) {
       .def_readwrite("landmarks", &BenchCase::landmarks)
       .def_readwrite("window", &BenchCase::window)
       .def_readwrite("seed", &BenchCase::seed)
-      .def_readwrite("seif", &BenchCase::seif);
+      .def_readwrite("seif", &BenchCase::seif)
+      .def_readwrite("linearization", &BenchCase::linearization)
+      .def_readwrite("iterations", &BenchCase::iterations);
   py::class_<BenchMeasurement>(m, "BenchMeasurement", "Times in microseconds, memory in MiB.")
       .def_readonly("filter", &BenchMeasurement::filter)
       .def_readonly("landmarks", &BenchMeasurement::landmarks)

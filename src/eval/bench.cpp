@@ -123,7 +123,10 @@ BenchMeasurement runBenchCase(const BenchCase& c) {
   us.reserve(window);
   std::size_t observations = 0;
 
-  auto filter = makeFilter(c.filter, start, config, c.seif);
+  FilterConfig filter_config = config;
+  filter_config.linearization = c.linearization;
+  filter_config.iterations = c.iterations;
+  auto filter = makeFilter(c.filter, start, filter_config, c.seif);
   WindowTimer timer(first, m, us, observations);
   const auto t_run = Clock::now();
   try {

@@ -323,6 +323,8 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
       c.window = args.window;
       c.seed = args.world_seed;
       c.seif = args.seif;
+      c.linearization = args.linearization;
+      c.iterations = args.iterations;
       BenchRow row;
       row.filter = filter;
       row.landmarks = n;
@@ -436,6 +438,8 @@ std::string benchJson(const BenchReport& report) {
                                  {"landmarks", args.landmarks},
                                  {"max_seconds", args.max_seconds},
                                  {"max_memory_gb", args.max_memory_gb},
+                                 {"linearization", linearizationName(args.linearization)},
+                                 {"iterations", args.iterations},
                                  {"seif", toJson(args.seif)}};
   const nlohmann::json doc = {{"machine", machineJson()},
                               {"config", config},

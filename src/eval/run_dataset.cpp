@@ -78,7 +78,11 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
   if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
   // The configuration the filter ran with: the flags' as the spec's own options override
   // them, written as a spec that parses back to it.
-  const FilterSpec spec = parseFilterSpec(r.filter, Linearization::Standard, request.seif);
+  FilterSpec defaults;
+  defaults.linearization = request.linearization;
+  defaults.iterations = request.iterations;
+  defaults.seif = request.seif;
+  const FilterSpec spec = parseFilterSpec(r.filter, defaults);
   j["filter_spec"] = canonicalFilterSpec(spec);
   if (spec.name == "seif") j["seif"] = toJson(spec.seif);
   return j.dump(2) + "\n";
@@ -132,6 +136,8 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   config.motion = source->info().motion;
   config.sensor = source->info().sensor;
   config.outlier_gate = request.outlier_gate;
+  config.linearization = request.linearization;
+  config.iterations = request.iterations;
   RunCheckpointing checkpointing;
   checkpointing.every = request.checkpoint_every;
   checkpointing.path = request.checkpoint;

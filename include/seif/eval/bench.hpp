@@ -7,6 +7,7 @@
 // runBenchCase() measures one case in the calling process; runBench() runs the whole study,
 // each case in a forked child so that the peak memory of one case does not leak into the next.
 #include <seif/filters/seif_options.hpp>
+#include <seif/filters/slam_filter.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -28,6 +29,8 @@ struct BenchCase {
   /// the map holds N - window .. N landmarks.
   int window = 200;
   std::uint64_t seed = 1;  ///< seed of the simulated world
+  Linearization linearization = Linearization::Standard;
+  int iterations = 1;
   SeifOptions seif;        ///< used when filter == "seif"
 };
 
@@ -139,6 +142,8 @@ struct BenchRequest {
   std::uint64_t world_seed = 1;
   double max_seconds = 120.0;   ///< time budget of all runs of one case
   double max_memory_gb = 4.0;   ///< memory budget of one case
+  Linearization linearization = Linearization::Standard;
+  int iterations = 1;
   SeifOptions seif;
 };
 

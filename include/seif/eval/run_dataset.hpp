@@ -27,6 +27,9 @@ struct RunRequest {
   DatasetOptions dataset_options;
   std::string filter = "seif";  ///< a filter spec: "ekf", "eif", "seif", "batch", with options
   double outlier_gate = FilterConfig{}.outlier_gate;
+  /// The defaults of the options `filter` does not set (the flags of `seif run`).
+  Linearization linearization = Linearization::Standard;
+  int iterations = 1;
   SeifOptions seif;
   bool map_covariances = true;  ///< map.csv with each landmark's exact marginal covariance
   /// trajectory_cov.csv: the pose covariance after every step (SEIF: one factorisation per
