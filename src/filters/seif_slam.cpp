@@ -70,20 +70,15 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   const Pose2 x = store_.robotMean();
   const std::span<const PlannedObservation> plan =
       book_.plan(observations, sensor, x, [&](int slot) { return store_.node(slot).mu; });
-  // Invariant: H re-anchored at the robot's mean, and at an observed landmark's once it
-  // has moved more than options.reanchor; the Jacobians' heading lever arm at the anchors.
+  // Invariant (update() has re-anchored): the Jacobians' heading lever arm at the anchors.
   const bool invariant = config_.linearization == Linearization::Invariant;
-  if (invariant) store_.reanchorRobot();
   const std::size_t sparsified = sparsifications_;
   infos_.clear();
   anchors_.clear();
   for (const PlannedObservation& p : plan) {
     if (p.first) store_.addLandmark(p.z->landmark, p.initial);
     std::optional<Anchors> anchors;
-    if (invariant) {
-      reanchorIfMoved(p.slot);
-      anchors = Anchors{store_.robotAnchor(), store_.node(p.slot).anchor};
-    }
+    if (invariant) anchors = Anchors{store_.robotAnchor(), store_.node(p.slot).anchor};
     const MeasurementInformation info = measurementInformation(sensor, x, store_.node(p.slot).mu, *p.z,
                                                                sensor.noise(*p.z).inverse(), p.jacobian_landmark,
                                                                anchors);
@@ -119,6 +114,7 @@ void SeifSlam::update(std::span<const Observation> observations, const Measureme
   const bool amortized = options_.mean == SeifOptions::Mean::Amortized;
   const bool book_order = options_.recovery == SeifOptions::Recovery::BeforeMeasurement;
   if (amortized && book_order) recoverMean();
+  if (config_.linearization == Linearization::Invariant) reanchor(observations);
   if (options_.sparsify == SeifOptions::Sparsify::Eseif) {
     eseifUpdate(observations, sensor);
     return;
@@ -133,6 +129,18 @@ void SeifSlam::update(std::span<const Observation> observations, const Measureme
   // active landmarks, and the sparsification's b~ = b + (H~ - H) mu is right only for their
   // exact mean: it re-solves that block first, on the block it gathers anyway.
   deactivateSurplus(amortized && book_order);
+}
+
+void SeifSlam::reanchor(std::span<const Observation> observations) {
+  // Before any of the step's information enters, while the mean is the one H and b hold:
+  // b' = b + (H' - H) mu keeps it (invariant.hpp). The robot every update; an observed
+  // landmark once it has moved more than options.reanchor from its anchor.
+  store_.reanchorRobot();
+  for (const Observation& z : observations) {
+    const int slot = book_.find(z.landmark);
+    if (slot >= 0) reanchorIfMoved(slot);
+  }
+  invalidateFactor();
 }
 
 void SeifSlam::reanchorIfMoved(int slot) {

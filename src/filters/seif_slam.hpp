@@ -124,6 +124,9 @@ class SeifSlam final : public SlamFilter {
   /// changed) when the pose does not converge.
   bool relocalizeRobot(const MeasurementModel& sensor);
   void invalidateFactor();
+  /// Linearization::Invariant, at the start of update(): re-anchors the robot, and each
+  /// observed landmark with reanchorIfMoved().
+  void reanchor(std::span<const Observation> observations);
   /// Linearization::Invariant: re-anchors landmark `slot` when its mean has moved more than
   /// options.reanchor from its anchor (sparsifying first when its neighbours would
   /// overflow the local block).

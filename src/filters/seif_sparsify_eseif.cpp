@@ -114,10 +114,7 @@ bool SeifSlam::partitionObservations(std::span<const Observation> z, const Measu
 bool SeifSlam::relocalizeRobot(const MeasurementModel& sensor) {
   // The robot's mean given z_alpha (re-solved on the block the marginalisation gathers) is
   // the start of a Gauss-Newton fit of the pose to z_beta and the landmarks' means.
-  const bool invariant = config_.linearization == Linearization::Invariant;
-  if (invariant) {  // z_beta's landmarks anchored before the robot leaves (their links move)
-    for (int slot : beta_slots_) reanchorIfMoved(slot);
-  }
+  const bool invariant = config_.linearization == Linearization::Invariant;  // anchored in update()
   store_.gatherActive();
   store_.solveLocalMean();
   Pose2 x = store_.robotMean();
