@@ -73,7 +73,7 @@ void applyProfile(FilterSpec& s, std::string_view v);
 
 const std::array<FilterOption, 14> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
-     "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=20 "
+     "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=30 "
      "(honest covariances in constant time; README)",
      &applyProfile, [](const FilterSpec&) { return std::string(); }},
     {"linearization", kAll, kChoice, "standard|fej|invariant", 0, 0,
