@@ -3,6 +3,7 @@
 // fixed seeds: they pass or fail deterministically, and fail if the noise is wrong.
 #include <seif/core/errors.hpp>
 #include <seif/core/angles.hpp>
+#include <seif/core/dataset.hpp>
 #include <seif/models/range_bearing.hpp>
 #include <seif/sim/world.hpp>
 
@@ -88,11 +89,12 @@ bool sameLog(const RobotLog& a, const RobotLog& b) {
 
 // --- names and configs -------------------------------------------------------------
 
-TEST(SimWorldPreset, ParsesTheThreeNamesAndRejectsOthersListingThem) {
+TEST(SimWorldPreset, ParsesTheFourNamesAndRejectsOthersListingThem) {
   EXPECT_EQ(seif::parseWorldPreset("paper"), WorldPreset::Paper);
   EXPECT_EQ(seif::parseWorldPreset("uniform"), WorldPreset::Uniform);
   EXPECT_EQ(seif::parseWorldPreset("corridor"), WorldPreset::Corridor);
-  for (WorldPreset p : {WorldPreset::Paper, WorldPreset::Uniform, WorldPreset::Corridor}) {
+  EXPECT_EQ(seif::parseWorldPreset("park"), WorldPreset::Park);
+  for (WorldPreset p : {WorldPreset::Paper, WorldPreset::Uniform, WorldPreset::Corridor, WorldPreset::Park}) {
     EXPECT_EQ(seif::parseWorldPreset(seif::worldPresetName(p)), p);
   }
   for (const char* bad : {"", "Paper", "papers", "grid"}) {
@@ -104,6 +106,28 @@ TEST(SimWorldPreset, ParsesTheThreeNamesAndRejectsOthersListingThem) {
       EXPECT_NE(msg.find("paper"), std::string::npos) << msg;
       EXPECT_NE(msg.find("uniform"), std::string::npos) << msg;
       EXPECT_NE(msg.find("corridor"), std::string::npos) << msg;
+      EXPECT_NE(msg.find("park"), std::string::npos) << msg;
+    }
+  }
+}
+
+TEST(SimWorldPreset, TheParkIsAnOutdoorWorldAtVictoriaParksScale) {
+  const seif::WorldConfig c = seif::presetConfig(WorldPreset::Park, 0, 0, 3);
+  EXPECT_EQ(c.landmarks, 150);
+  EXPECT_DOUBLE_EQ(c.sensor_range, 30.0);
+  EXPECT_DOUBLE_EQ(c.noise.sigma_range, 0.5);
+  SimStats stats;
+  const RobotLog log = simulate(c, &stats);
+  // About 2 km of lawnmower loop at 3 m/s, 4 Hz; ~6-7 trees in view (the paper world's count).
+  EXPECT_GT(c.steps, 1500);
+  EXPECT_GT(stats.mean_detections_per_step, 4.0);
+  EXPECT_LT(stats.mean_detections_per_step, 10.0);
+  EXPECT_GE(stats.distinct_landmarks_seen, 140u);
+  const seif::Dataset d = seif::buildDataset(log);
+  for (const seif::Step& s : d.steps) {
+    for (const seif::Observation& z : s.observations) {
+      EXPECT_GE(z.z.x(), 0.0);  // noisy ranges of trees between 1 m and 30 m
+      EXPECT_LT(z.z.x(), 32.0);
     }
   }
 }

@@ -76,7 +76,7 @@ void addConsistencyCommand(CLI::App& app) {
       "Writes OUT/nees.json, OUT/nees.csv, OUT/table.md and the figures nees_global.png and\n"
       "nees_relative.png (scripts/figures/consistency.py, /usr/bin/python3 with matplotlib).");
   cmd->add_option("--preset", args->preset, "simulator world: paper, uniform or corridor")
-      ->check(CLI::IsMember({"paper", "uniform", "corridor"}))
+      ->check(CLI::IsMember({"paper", "uniform", "corridor", "park"}))
       ->capture_default_str();
   cmd->add_option("--path", args->path, "the paper world's path: lawnmower or lissajous")
       ->check(CLI::IsMember({"lawnmower", "lissajous"}))

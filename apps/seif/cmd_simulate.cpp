@@ -46,8 +46,8 @@ void addSimulateCommand(CLI::App& app) {
       "Presets: paper (the paper's 50 landmarks in the unit square, 500 steps), uniform (the\n"
       "paper's density over N landmarks), corridor (a long strip: the map grows steadily).\n"
       "See docs/simulator.md.");
-  cmd->add_option("--preset", args->preset, "paper, uniform or corridor")
-      ->check(CLI::IsMember({"paper", "uniform", "corridor"}))
+  cmd->add_option("--preset", args->preset, "paper, uniform, corridor or park (an outdoor park at Victoria Park's scale)")
+      ->check(CLI::IsMember({"paper", "uniform", "corridor", "park"}))
       ->capture_default_str();
   cmd->add_option("--path", args->path, "the paper world's path: lawnmower or lissajous")
       ->check(CLI::IsMember({"lawnmower", "lissajous"}))

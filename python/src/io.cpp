@@ -105,11 +105,12 @@ void bindSources(py::module_& m) {
 }
 
 void bindSimulator(py::module_& m) {
-  bindNamedEnum<WorldPreset>(m, "WorldPreset", "'paper' | 'uniform' | 'corridor'", &parseWorldPreset,
+  bindNamedEnum<WorldPreset>(m, "WorldPreset", "'paper' | 'uniform' | 'corridor' | 'park'", &parseWorldPreset,
                              &worldPresetName)
       .value("Paper", WorldPreset::Paper)
       .value("Uniform", WorldPreset::Uniform)
-      .value("Corridor", WorldPreset::Corridor);
+      .value("Corridor", WorldPreset::Corridor)
+      .value("Park", WorldPreset::Park);
   bindNamedEnum<PaperPath>(m, "PaperPath", "'lawnmower' | 'lissajous'", &parsePaperPath, &paperPathName)
       .value("Lawnmower", PaperPath::Lawnmower)
       .value("Lissajous", PaperPath::Lissajous);

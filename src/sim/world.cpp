@@ -44,6 +44,11 @@ constexpr int kUniformLandmarks = 500;
 constexpr double kUniformSpeed = kPaperSpeed;
 constexpr double kLaneSpacingPerRange = 1.5;  // lanes 1.5 sensor ranges apart: swaths overlap
 constexpr double kMarginPerRange = 0.75;      // path 0.75 sensor ranges inside the border
+// Park world (WorldPreset::Park).
+constexpr int kParkLandmarks = 150;
+constexpr double kParkDensity = 1.0 / 400.0;  // trees per m^2
+constexpr double kParkSpeed = 3.0;           // m/s
+constexpr double kParkPeriod = 0.25;         // s
 // Corridor world.
 constexpr int kCorridorLandmarks = 1000;
 constexpr double kCorridorSpeed = 0.05;  // density 50 x width 0.4 x 0.05 m = 1 new landmark/step
@@ -100,7 +105,8 @@ World makeWorld(const WorldConfig& c) {
               c.paper_path == PaperPath::Lissajous
                   ? sim::lissajous(Vec2(0.5, 0.5), kPaperAmplitude, 3, 2)
                   : sim::lawnmowerLoop(1.0, kPaperMargin, kPaperLaneSpacing, kPaperTurnRadius)};
-    case WorldPreset::Uniform: {
+    case WorldPreset::Uniform:
+    case WorldPreset::Park: {
       const double side = uniformSide(c);
       return {Vec2(0.0, 0.0), Vec2(side, side), uniformPath(side, c.sensor_range)};
     }
@@ -129,7 +135,7 @@ void validate(const WorldConfig& c) {
   require(c.paper_path == PaperPath::Lawnmower || c.paper_path == PaperPath::Lissajous,
           "unknown paper path");
   require(c.preset == WorldPreset::Paper || c.preset == WorldPreset::Uniform ||
-              c.preset == WorldPreset::Corridor,
+              c.preset == WorldPreset::Corridor || c.preset == WorldPreset::Park,
           "unknown world preset");
   require(c.landmarks >= 1, got("landmarks must be >= 1", c.landmarks));
   require(c.steps >= 1, got("steps must be >= 1", c.steps));
@@ -184,8 +190,9 @@ WorldPreset parseWorldPreset(std::string_view name) {
   if (name == "paper") return WorldPreset::Paper;
   if (name == "uniform") return WorldPreset::Uniform;
   if (name == "corridor") return WorldPreset::Corridor;
+  if (name == "park") return WorldPreset::Park;
   throw InvalidArgument("unknown world \"" + std::string(name) +
-                              "\": valid worlds are paper, uniform, corridor");
+                              "\": valid worlds are paper, uniform, corridor, park");
 }
 
 std::string_view worldPresetName(WorldPreset preset) {
@@ -193,6 +200,7 @@ std::string_view worldPresetName(WorldPreset preset) {
     case WorldPreset::Paper: return "paper";
     case WorldPreset::Uniform: return "uniform";
     case WorldPreset::Corridor: return "corridor";
+    case WorldPreset::Park: return "park";
   }
   return "unknown";
 }
@@ -247,6 +255,19 @@ WorldConfig presetConfig(WorldPreset preset, int landmarks, int steps, std::uint
                           : toSteps(std::max<double>(
                                 kPaperSteps, lapSteps(uniformPath(uniformSide(c), c.sensor_range)
                                                           .length())));
+      break;
+    case WorldPreset::Park:
+      c.landmarks = landmarks > 0 ? landmarks : kParkLandmarks;
+      c.density = kParkDensity;
+      c.sensor_range = 30.0;
+      c.min_range = 1.0;
+      c.speed = kParkSpeed;
+      c.dt = kParkPeriod;
+      c.noise.sigma_v = 0.16;
+      c.noise.sigma_w = 0.012;
+      c.noise.sigma_range = 0.5;
+      c.noise.sigma_bearing = 2.0 * std::numbers::pi / 180.0;
+      c.steps = steps > 0 ? steps : toSteps(lapSteps(uniformPath(uniformSide(c), c.sensor_range).length()));
       break;
     case WorldPreset::Corridor:
       c.landmarks = landmarks > 0 ? landmarks : kCorridorLandmarks;

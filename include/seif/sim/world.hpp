@@ -21,9 +21,14 @@ enum class WorldPreset {
   Paper,     ///< Thrun et al. 2002: landmarks uniform in the unit square (path: PaperPath)
   Uniform,   ///< the paper's density and sensor in a square of side sqrt(N / 50), lawnmower loop
   Corridor,  ///< a straight strip at the paper's density, driven once: the map grows steadily
+  /// An outdoor park like Victoria Park: trees uniform in a square (150 by default, one per
+  /// 400 m^2: about 245 m a side), a vehicle at 3 m/s on a lawnmower loop, a laser-like
+  /// range-bearing sensor of 30 m (1 m blind zone), 4 Hz, noise like Victoria Park's
+  /// (range 0.5 m, bearing 2 deg; speed 0.16 m/s and turn rate 0.012 rad/s per step).
+  Park,
 };
 
-/// "paper" | "uniform" | "corridor". Throws InvalidArgument naming the valid names.
+/// "paper" | "uniform" | "corridor" | "park". Throws InvalidArgument naming the valid names.
 WorldPreset parseWorldPreset(std::string_view name);
 
 /// The preset's lower-case name, as parseWorldPreset() accepts it.
