@@ -75,7 +75,7 @@ void addConsistencyCommand(CLI::App& app) {
       "pose and landmark, the reference), e.g. seif:sparsify=eseif,linearization=fej.\n"
       "Writes OUT/nees.json, OUT/nees.csv, OUT/table.md and the figures nees_global.png and\n"
       "nees_relative.png (scripts/figures/consistency.py, /usr/bin/python3 with matplotlib).");
-  cmd->add_option("--preset", args->preset, "simulator world: paper, uniform or corridor")
+  cmd->add_option("--preset", args->preset, "simulator world: paper, uniform, corridor or park")
       ->check(CLI::IsMember({"paper", "uniform", "corridor", "park"}))
       ->capture_default_str();
   cmd->add_option("--path", args->path, "the paper world's path: lawnmower or lissajous")
