@@ -167,3 +167,27 @@ TEST(Consistency, TheBatchMapIsConsistentAndTheEkfIsNot) {
 }
 
 }  // namespace
+
+TEST(ConsistencyMrclam, RealRunsMeasureNeesAgainstViconAndTheSurveyedLandmarks) {
+  const std::string folder = std::string(SEIF_SHARED_DATA_DIR) + "/mrclam/MRCLAM_Dataset6";
+  if (!std::filesystem::exists(folder)) GTEST_SKIP() << "MRCLAM dataset 6 not found at " << folder;
+  seif::ConsistencyOptions o;
+  o.datasets = seif::mrclamConsistencyRuns(folder, {1, 3});
+  ASSERT_EQ(o.datasets.size(), 2u);
+  EXPECT_NE(o.datasets[1].data.steps.size(), o.datasets[0].data.steps.size());  // runs of any length
+  o.samples = 5;
+  o.filters = {seif::parseFilterSpec("ekf"), seif::parseFilterSpec("ekf:linearization=invariant,iterations=2")};
+  const seif::ConsistencyResult r = seif::runConsistency(o);
+  EXPECT_EQ(r.runs, 2);
+  for (const auto& f : r.filters) {
+    EXPECT_TRUE(std::isfinite(f.nees_final.pose) && f.nees_final.pose > 0.0) << f.name;
+    EXPECT_TRUE(std::isfinite(f.nees_final.landmark) && f.nees_final.landmark > 0.0) << f.name;
+    EXPECT_GT(f.error_aligned_final, 0.0);
+    EXPECT_LT(f.error_aligned_final, 0.5) << f.name;  // metres: the map is recovered
+  }
+  // The invariant, iterated EKF is the more honest of the two on real data too.
+  EXPECT_LT(r.filters[1].nees_final.landmark, r.filters[0].nees_final.landmark);
+  const auto j = nlohmann::json::parse(seif::consistencyJson(r, o));
+  EXPECT_EQ(j.at("datasets").size(), 2u);
+  EXPECT_THROW(seif::mrclamConsistencyRuns(folder, {6}), seif::InvalidArgument);
+}

@@ -26,6 +26,8 @@ struct ConsistencyArgs {
   int jobs = 0;
   std::string out = "out/consistency";
   bool no_figures = false;
+  std::string dataset;           // real data: an MRCLAM folder
+  std::vector<int> robots = {1, 2, 3, 4, 5};
 };
 
 void consistencyCommand(const ConsistencyArgs& args) {
@@ -39,11 +41,18 @@ void consistencyCommand(const ConsistencyArgs& args) {
   requireOutputFolder(args.out);
   const std::filesystem::path dir(args.out);
 
-  std::printf("seif consistency: %s world%s, %d landmarks, %d steps, %d runs (seeds %llu..%llu)\n",
-              args.preset.c_str(), args.preset == "paper" ? (" (" + args.path + ")").c_str() : "",
-              options.world.landmarks, options.world.steps, args.runs,
-              static_cast<unsigned long long>(args.seed),
-              static_cast<unsigned long long>(args.seed + static_cast<std::uint64_t>(args.runs) - 1));
+  if (!args.dataset.empty()) {
+    options.datasets = mrclamConsistencyRuns(args.dataset, args.robots);
+    std::printf("seif consistency: %s, robots", args.dataset.c_str());
+    for (int r : args.robots) std::printf(" %d", r);
+    std::printf(" (Vicon poses and surveyed landmarks the truth)\n");
+  } else {
+    std::printf("seif consistency: %s world%s, %d landmarks, %d steps, %d runs (seeds %llu..%llu)\n",
+                args.preset.c_str(), args.preset == "paper" ? (" (" + args.path + ")").c_str() : "",
+                options.world.landmarks, options.world.steps, args.runs,
+                static_cast<unsigned long long>(args.seed),
+                static_cast<unsigned long long>(args.seed + static_cast<std::uint64_t>(args.runs) - 1));
+  }
   ConsistencyResult result;
   {
     Progress progress("seif consistency");
@@ -98,6 +107,14 @@ void addConsistencyCommand(CLI::App& app) {
   cmd->add_option("--jobs", args->jobs, "threads (default: the number of cores)")->transform(integerIn(1, INT_MAX));
   cmd->add_option("--out", args->out, "output folder")->capture_default_str();
   cmd->add_flag("--no-figures", args->no_figures, "write the data but do not render the figures");
+  cmd->add_option("--dataset", args->dataset,
+                  "real data instead of the simulator: an MRCLAM folder, one run per robot (--robots),\n"
+                  "its ground truth (Vicon poses, surveyed landmarks) the reference")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--robots", args->robots, "MRCLAM robots of --dataset")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 5))
+      ->capture_default_str();
   cmd->callback([args] { consistencyCommand(*args); });
 }
 

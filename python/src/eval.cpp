@@ -346,9 +346,17 @@ void bindPaper(py::module_& m) {
 }
 
 void bindConsistency(py::module_& m) {
+  py::class_<ConsistencyDataset>(m, "ConsistencyDataset", "One real run of the NEES study: data with ground truth.")
+      .def(py::init<>())
+      .def_readwrite("name", &ConsistencyDataset::name)
+      .def_readwrite("data", &ConsistencyDataset::data)
+      .def_readwrite("config", &ConsistencyDataset::config);
+  m.def("mrclam_consistency_runs", &mrclamConsistencyRuns, py::arg("folder"), py::arg("robots"),
+        "The MRCLAM robots of `folder` as runs of the NEES study (Vicon poses, surveyed landmarks).");
   py::class_<ConsistencyOptions>(m, "ConsistencyOptions", "The Monte-Carlo NEES study (eval/consistency.hpp).")
       .def(py::init<>())
       .def_readwrite("world", &ConsistencyOptions::world)
+      .def_readwrite("datasets", &ConsistencyOptions::datasets, "real runs (then world and runs are unused)")
       .def_readwrite("runs", &ConsistencyOptions::runs)
       .def_readwrite("filters", &ConsistencyOptions::filters, "list of FilterSpec (parse_filter_spec)")
       .def_readwrite("samples", &ConsistencyOptions::samples)

@@ -5,6 +5,8 @@
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_loop.hpp>
 #include "io/atomic_file.hpp"
+#include <seif/io/event_source.hpp>
+#include <seif/io/mrclam.hpp>
 
 #include "json_fields.hpp"
 
@@ -174,38 +176,62 @@ NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const st
   return p;
 }
 
+std::vector<ConsistencyDataset> mrclamConsistencyRuns(const std::filesystem::path& folder,
+                                                      const std::vector<int>& robots) {
+  std::vector<ConsistencyDataset> out;
+  for (int robot : robots) {
+    if (robot < 1 || robot > 5) throw InvalidArgument("consistency: MRCLAM robot " + std::to_string(robot) + " is not in 1..5");
+    DatasetOptions o;
+    o.robot = robot;
+    const std::unique_ptr<EventSource> source = openDataset(folder, DatasetFormat::Mrclam, o);
+    ConsistencyDataset d;
+    d.name = folder.filename().string() + " robot " + std::to_string(robot);
+    d.data = buildDataset(readMrclam(folder, robot));
+    d.config.motion = source->info().motion;
+    d.config.sensor = source->info().sensor;
+    if (d.data.groundtruth.empty() || d.data.landmarks.empty()) {
+      throw DataError(folder.string(), 0, "robot " + std::to_string(robot) + " has no ground truth to measure NEES against");
+    }
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
 ConsistencyResult runConsistency(const ConsistencyOptions& options,
                                  const std::function<void(std::size_t, std::size_t)>& progress) {
-  if (options.runs < 1) throw InvalidArgument("consistency: runs must be >= 1");
+  const bool real = !options.datasets.empty();
+  if (!real && options.runs < 1) throw InvalidArgument("consistency: runs must be >= 1");
   if (options.samples < 1) throw InvalidArgument("consistency: samples must be >= 1");
   if (options.filters.empty()) throw InvalidArgument("consistency: no filter given");
-  const std::size_t runs = static_cast<std::size_t>(options.runs);
+  const std::size_t runs = real ? options.datasets.size() : static_cast<std::size_t>(options.runs);
   const std::size_t nf = options.filters.size();
   std::vector<std::vector<FilterRun>> results(runs);  // [run][filter]
   std::vector<std::size_t> steps_of_run(runs, 0);
   auto runFilters = [&](std::size_t r) {
     WorldConfig world = options.world;
     world.seed = options.world.seed + r;
-    const Dataset data = buildDataset(simulate(world));
-    const FilterConfig config = paperFilterConfig(data.noise.value_or(world.noise));
-    const Pose2 start = startPose(data);
-    const std::vector<std::size_t> samples = sampleSteps(data.steps.size(), options.samples);
-    steps_of_run[r] = data.steps.size();
+    const Dataset data = real ? Dataset() : buildDataset(simulate(world));
+    const Dataset& run_data = real ? options.datasets[r].data : data;
+    const FilterConfig config = real ? options.datasets[r].config : paperFilterConfig(data.noise.value_or(world.noise));
+    const Pose2 start = startPose(run_data);
+    const std::vector<std::size_t> samples = sampleSteps(run_data.steps.size(), options.samples);
+    steps_of_run[r] = run_data.steps.size();
     for (const FilterSpec& spec : options.filters) {
       try {
-        results[r].push_back(runOne(spec, data, config, start, samples, world.seed));
+        results[r].push_back(runOne(spec, run_data, config, start, samples, world.seed));
       } catch (const std::exception& e) {
-        throw NumericError("consistency: run with seed " + std::to_string(world.seed) + ", filter " + spec.text +
-                           ": " + e.what());
+        throw NumericError("consistency: " +
+                           (real ? options.datasets[r].name : "run with seed " + std::to_string(world.seed)) +
+                           ", filter " + spec.text + ": " + e.what());
       }
     }
   };
   parallelFor(runs, options.threads, runFilters, progress);
 
   ConsistencyResult result;
-  result.runs = options.runs;
+  result.runs = static_cast<int>(runs);
   result.steps = steps_of_run[0];
-  for (std::size_t r = 1; r < runs; ++r) {
+  for (std::size_t r = 1; r < runs && !real; ++r) {  // real runs: sampled at the same fractions
     if (steps_of_run[r] != result.steps) {
       throw NumericError("consistency: runs differ in their number of steps (" + std::to_string(result.steps) +
                          " and " + std::to_string(steps_of_run[r]) + ")");
@@ -271,6 +297,8 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
                        {"nees", series}});
   }
   const WorldConfig& w = options.world;
+  nlohmann::json datasets = nlohmann::json::array();
+  for (const ConsistencyDataset& d : options.datasets) datasets.push_back(d.name);
   nlohmann::json j = {
       {"runs", result.runs},
       {"steps", result.steps},
@@ -287,6 +315,7 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
         {"landmark", {result.landmark_band.lo, result.landmark_band.hi}}}},
       {"sample_steps", result.sample_steps},
       {"filters", filters}};
+  if (!datasets.empty()) j["datasets"] = datasets;
   return j.dump(2);
 }
 

@@ -10,6 +10,10 @@
 // Beside NEES, the final landmark error (unaligned and after rigid alignment). Run r
 // simulates the world with seed world.seed + r; every filter sees the same data; runs are
 // independent and stored by index, so the results do not depend on the number of threads.
+// Or real data with ground truth (ConsistencyOptions::datasets, e.g. the five MRCLAM
+// robots): run r is dataset r with its own models; the series are then sampled at the same
+// fractions of each run.
+#include <seif/core/dataset.hpp>
 #include <seif/eval/stats.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/sim/world.hpp>
@@ -23,8 +27,23 @@
 
 namespace seif {
 
+/// One real run of the study: a dataset with ground truth (poses and landmarks) and the
+/// filter configuration of its models (as `seif run` builds it).
+struct ConsistencyDataset {
+  std::string name;  ///< e.g. "MRCLAM_Dataset6 robot 3"
+  Dataset data;
+  FilterConfig config;
+};
+
+/// The MRCLAM robots of `folder` as consistency runs (Vicon poses and surveyed landmarks the
+/// truth). Throws DataError as the reader does, InvalidArgument for a robot outside 1..5.
+std::vector<ConsistencyDataset> mrclamConsistencyRuns(const std::filesystem::path& folder,
+                                                      const std::vector<int>& robots);
+
 struct ConsistencyOptions {
   WorldConfig world;
+  /// When not empty, the runs (one per dataset; `world` and `runs` unused).
+  std::vector<ConsistencyDataset> datasets;
   int runs = 50;
   std::vector<FilterSpec> filters;
   /// Points of the NEES-against-time series, evenly spaced over the steps (the last step
