@@ -140,7 +140,7 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateEseifSteps) {
   seif::SeifOptions options;
   options.sparsify = seif::SeifOptions::Sparsify::Eseif;
   options.active = 4;
-  EXPECT_GT(expectNoHeapAllocationInSteadyStateSteps(options), 500u);
+  EXPECT_GT(expectNoHeapAllocationInSteadyStateSteps(options), 300u);
 }
 
 TEST(SeifAllocation, NoHeapAllocationInSteadyStateInvariantIteratedSteps) {

@@ -67,7 +67,8 @@ bool SeifSlam::partitionObservations(std::span<const Observation> z, const Measu
   // Candidates for z_beta: observations of mapped landmarks, the best informed (largest
   // trace of H_ll) first. z_beta takes beta of them, or more until their stacked
   // sum J_x^T R^-1 J_x fixes all three pose dof, well conditioned; at most options.active, so
-  // that the relocalised robot's active set is within bounds.
+  // that the relocalised robot's active set is within bounds. Fewer than beta: no z_beta
+  // (the step defers; relocalising from too few discards the odometry for a poor pose).
   alpha_.clear();
   beta_.clear();
   beta_slots_.clear();
@@ -99,7 +100,7 @@ bool SeifSlam::partitionObservations(std::span<const Observation> z, const Measu
     roles_[static_cast<std::size_t>(i)] = kBeta;
     beta_.push_back(o);
     beta_slots_.push_back(slot);
-    found = beta_.size() >= 2 && wellConditioned(A);
+    found = beta_.size() >= std::max<std::size_t>(2, target) && wellConditioned(A);
   }
   for (std::size_t i = 0; i < z.size(); ++i) {
     if (roles_[i] == kAlpha || (roles_[i] == kBeta && !found)) alpha_.push_back(z[i]);

@@ -47,10 +47,12 @@ struct SeifOptions {
   /// so it is smaller than the marginal - an approximation for display, not for gating.
   Covariance covariance = Covariance::Exact;
   /// Eseif: how many landmarks' observations relocalise the robot (z_beta), best informed
-  /// first, when the step has that many: >= 2 (a 2-D point sensor's least for the 3-dof
-  /// pose); fewer when the step has fewer (but 2), more while the pose is ill-conditioned,
-  /// never more than `active`. More give a better relocalised pose (docs: the paper's
-  /// world's map error is several times smaller with 4 than with 2).
+  /// first: >= 2 (a 2-D point sensor's least for the 3-dof pose), more while the pose is
+  /// ill-conditioned, never more than `active`. A step with fewer mapped landmarks in view
+  /// does not relocalise (the odometry is kept; the active set waits for a step that can):
+  /// relocalising from fewer threw the odometry away for a poor pose (MRCLAM). More give a
+  /// better relocalised pose (docs: the paper's world's map error is several times smaller
+  /// with 4 than with 2).
   int beta = 4;
   /// Linearization::Invariant: an observed landmark whose mean has moved more than this
   /// [m] from where H is anchored for it is re-anchored before its update (its neighbours
