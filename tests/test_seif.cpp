@@ -291,3 +291,24 @@ TEST(Seif, LowerInformationIsTheLowerTriangleOfH) {
   EXPECT_EQ(Eigen::MatrixXd(lower), Eigen::MatrixXd(full.triangularView<Eigen::Lower>()));
   EXPECT_GT(seif.stats().links, seif.robotLinks());  // landmark-landmark links are in it
 }
+
+TEST(Seif, AFilterThatFailedNumericallyRefusesFurtherSteps) {
+  // A singular motion Jacobian (G = I + J = 0) cannot be inverted in information form: a
+  // NumericError. The SEIF cannot undo a step, so it refuses every later one with that error
+  // instead of going on from a half-applied state.
+  const test::Scenario s = test::makeScenario(3, 10, 20);
+  SeifSlam seif(s.start, configFor(s));
+  for (const Step& step : s.steps) seif.step(step.u, step.observations);
+  MotionIncrement singular;
+  singular.J_delta_x = -Mat3::Identity();
+  singular.U = 1e-4 * Mat3::Identity();
+  EXPECT_THROW(seif.predict(singular), seif::NumericError);
+  const Step& next = s.steps.front();
+  try {
+    seif.step(next.u, next.observations);
+    ADD_FAILURE() << "a failed filter stepped on";
+  } catch (const seif::NumericError& e) {
+    EXPECT_NE(std::string(e.what()).find("refuses further steps"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(seif.update(next.observations), seif::NumericError);
+}

@@ -45,7 +45,20 @@ void SeifSlam::invalidateFactor() { factor_.reset(); }
 
 // ---------------------------------------------------------------- the four steps -------
 
-void SeifSlam::predict(const MotionIncrement& increment) { motionUpdate(increment); }
+void SeifSlam::predict(const MotionIncrement& increment) {
+  guarded([&] { motionUpdate(increment); });
+}
+
+template <typename Step>
+void SeifSlam::guarded(const Step& step) {
+  if (!failed_.empty()) throw NumericError(failed_);
+  try {
+    step();
+  } catch (const NumericError& e) {
+    failed_ = std::string(e.what()) + " (the SEIF cannot undo a step: it refuses further steps; reload a checkpoint)";
+    throw NumericError(failed_);
+  }
+}
 
 void SeifSlam::motionUpdate(const MotionIncrement& increment) {
   const MotionIncrement m = book_.motionIncrement(increment, store_.robotMean().head<2>());
@@ -110,7 +123,12 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
 }
 
 void SeifSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
+  if (!failed_.empty()) throw NumericError(failed_);
   book_.check(observations, sensor);  // bad input is refused before the state changes
+  guarded([&] { applyUpdate(observations, sensor); });
+}
+
+void SeifSlam::applyUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
   const bool amortized = options_.mean == SeifOptions::Mean::Amortized;
   const bool book_order = options_.recovery == SeifOptions::Recovery::BeforeMeasurement;
   if (amortized && book_order) recoverMean();

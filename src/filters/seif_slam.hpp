@@ -124,6 +124,12 @@ class SeifSlam final : public SlamFilter {
   /// changed) when the pose does not converge.
   bool relocalizeRobot(const MeasurementModel& sensor);
   void invalidateFactor();
+  /// update() after its input checks.
+  void applyUpdate(std::span<const Observation> observations, const MeasurementModel& sensor);
+  /// Runs a step; a NumericError from it marks the filter failed (failed_), and a failed
+  /// filter refuses every step with that message.
+  template <typename Step>
+  void guarded(const Step& step);
   /// Linearization::Invariant, at the start of update(): re-anchors the robot, and each
   /// observed landmark with reanchorIfMoved().
   void reanchor(std::span<const Observation> observations);
@@ -154,6 +160,7 @@ class SeifSlam final : public SlamFilter {
   std::vector<MeasurementInformation> infos_;  // measurementUpdate()'s, for iterations
   std::vector<std::optional<Anchors>> anchors_;
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
+  std::string failed_;  // the NumericError a step ended with; empty while the filter is sound
 
   /// The sparse Cholesky factor of H and its selected inverse, built on first use after H
   /// changed: exact means and marginal covariances.
