@@ -106,6 +106,12 @@ void NoiseFlags::add(CLI::App& cmd) {
                  "(a noise density: the injected noise grows with the step's duration); default: "
                  "the format's (simulated folders per-step, recorded logs rate)")
       ->check(CLI::IsMember({"per-step", "rate"}));
+  cmd.add_option("--isam-landmarks", isam_landmarks,
+                 "how an iSAM LANDMARK record (x, y, covariance) is read: cartesian (the point with its\n"
+                 "covariance) or gtsam (as GTSAM's loader: bearing atan2(y, x), range hypot(x, y),\n"
+                 "sigma_bearing = sqrt(m11 / 10), sigma_range = sqrt(m11)), so that costs compare with GTSAM's")
+      ->check(CLI::IsMember({"cartesian", "gtsam"}))
+      ->capture_default_str();
 }
 
 DatasetOptions NoiseFlags::resolve() const {
@@ -114,6 +120,7 @@ DatasetOptions NoiseFlags::resolve() const {
     if (value) o.noise[name] = *value;
   }
   if (!form.empty()) o.noise_form = parseNoiseForm(form);
+  o.isam_landmarks_as_gtsam = isam_landmarks == "gtsam";
   return o;
 }
 
@@ -130,14 +137,17 @@ CLI::Validator filterSpecs() {
       "SPEC[,SPEC...]");
 }
 
-void FilterFlags::add(CLI::App& cmd) {
+void FilterFlags::add(CLI::App& cmd, bool batch) {
   FilterSpec defaults;
   defaults.name = "seif";
   for (const FilterOption& o : filterOptions()) {
     if (o.kind == FilterOption::Kind::Profile) continue;
+    if (o.scope == FilterOption::Scope::Batch && !batch) continue;
     std::string& value = values[std::string(o.key)];
     value = o.get(defaults);
-    const std::string scope = o.scope == FilterOption::Scope::Seif ? "SEIF: " : "";
+    const std::string scope = o.scope == FilterOption::Scope::Seif    ? "SEIF: "
+                              : o.scope == FilterOption::Scope::Batch ? "batch (and --smooth): "
+                                                                      : "";
     CLI::Option* flag = cmd.add_option("--" + std::string(o.key), value, scope + std::string(o.help));
     switch (o.kind) {
       case FilterOption::Kind::Choice: {
@@ -176,13 +186,13 @@ FilterSpec FilterFlags::resolve() const {
 }
 
 std::string filterSpecHelp() {
-  std::string all, seif;
+  std::string all, seif, batch;
   for (const FilterOption& o : filterOptions()) {
-    std::string& list = o.scope == FilterOption::Scope::Seif ? seif : all;
+    std::string& list = o.scope == FilterOption::Scope::Seif ? seif : o.scope == FilterOption::Scope::Batch ? batch : all;
     list.append(list.empty() ? "" : ", ").append(o.key);
     if (o.kind == FilterOption::Kind::Choice || o.kind == FilterOption::Kind::Profile) list.append("=").append(o.choices);
   }
-  return "keys: " + all + " (every filter but the batch); for the seif " + seif +
+  return "keys: " + all + " (every filter but the batch); for the seif " + seif + "; for the batch " + batch +
          " (the flags of the same names set the defaults)";
 }
 

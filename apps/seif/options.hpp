@@ -46,6 +46,7 @@ void requireOutputFolder(const std::string& out);
 struct NoiseFlags {
   std::map<std::string, std::optional<double>> sigmas;  ///< noise name -> value if given
   std::string form;                                      ///< --noise-form, empty: the format's
+  std::string isam_landmarks = "cartesian";              ///< --isam-landmarks
   void add(CLI::App& cmd);
   DatasetOptions resolve() const;
 };
@@ -55,7 +56,8 @@ struct NoiseFlags {
 /// the library's defaults. A spec's own keys (--filter seif:active=4) override them.
 struct FilterFlags {
   std::map<std::string, std::string> values;  ///< option key -> value as typed
-  void add(CLI::App& cmd);
+  /// Every option's flag; the batch's (--init, --solver) only with `batch`.
+  void add(CLI::App& cmd, bool batch = false);
   /// The flags as a spec's defaults (name "seif").
   FilterSpec resolve() const;
 };

@@ -162,7 +162,9 @@ void bindConfig(py::module_& m) {
             std::replace(a.begin(), a.end(), '-', '_');
             return a;
           }();
-          row["filters"] = o.scope == FilterOption::Scope::Seif ? py::make_tuple("seif") : py::make_tuple("ekf", "eif", "seif");
+          row["filters"] = o.scope == FilterOption::Scope::Seif    ? py::make_tuple("seif")
+                           : o.scope == FilterOption::Scope::Batch ? py::make_tuple("batch")
+                                                                   : py::make_tuple("ekf", "eif", "seif");
           row["choices"] = std::string(o.choices);
           row["profile"] = o.kind == FilterOption::Kind::Profile;
           row["default"] = o.get(seif_defaults);

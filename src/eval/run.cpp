@@ -52,6 +52,7 @@ class OutputRecorder : public RunObserver {
         throw NumericError(filter.name() + ": the smoothed trajectory has " + std::to_string(smoothed.size()) +
                            " poses for " + std::to_string(out_.trajectory.size()) + " steps");
       }
+      out_.filter_trajectory = out_.trajectory;
       for (std::size_t k = 0; k < smoothed.size(); ++k) out_.trajectory[k].pose = smoothed[k];
       if (!out_.pose_covariances.empty()) out_.pose_covariances = filter.smoothedTrajectoryCovariances();
     }

@@ -76,12 +76,41 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"dropped", dropped},
   };
   if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
+  j["smooth"] = request.smooth;
+  if (r.smoother) {
+    const SmootherReport& b = *r.smoother;
+    j["batch"] = {{"init", b.init},
+                  {"poses", b.poses},
+                  {"landmarks", b.landmarks},
+                  {"constraints", b.constraints},
+                  {"iterations", b.iterations},
+                  {"initial_cost", b.initial_cost},
+                  {"final_cost", b.final_cost},
+                  {"gradient_norm", b.gradient_norm},
+                  {"initial_gradient_norm", b.initial_gradient_norm},
+                  {"solve_seconds", b.solve_seconds},
+                  {"linearize_seconds", b.linearize_seconds},
+                  {"factorize_seconds", b.factorize_seconds},
+                  {"step_seconds", b.step_seconds},
+                  {"factor_nonzeros", b.factor_nonzeros},
+                  {"costs", b.costs},
+                  {"cost", "0.5 chi-square: the sum of squared whitened residuals over two"}};
+  }
+  if (r.filter_errors) {
+    const RunErrors& f = *r.filter_errors;
+    j["filter_before_smoothing"] = {{"landmark_rmse", optionalJson(f.landmark)},
+                                    {"ate_rmse", optionalJson(f.ate)},
+                                    {"gps_rmse", optionalJson(f.gps)},
+                                    {"gps_median_error", optionalJson(f.gps_median)},
+                                    {"map_distance_to_batch", optionalJson(r.filter_map_distance)}};
+  }
   // The configuration the filter ran with: the flags' as the spec's own options override
   // them, written as a spec that parses back to it.
   FilterSpec defaults;
   defaults.linearization = request.linearization;
   defaults.iterations = request.iterations;
   defaults.seif = request.seif;
+  defaults.batch = request.batch;
   const FilterSpec spec = parseFilterSpec(r.filter, defaults);
   j["filter_spec"] = canonicalFilterSpec(spec);
   if (spec.name == "seif") j["seif"] = toJson(spec.seif);
@@ -156,7 +185,14 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
     checkpointing.values["filter"] = extras.values["filter"];
     resume = runResumeFrom(extras.values, static_cast<std::size_t>(extras.steps_consumed), name);
   } else {
-    filter = makeFilter(request.filter, source->info().start_pose, config, request.seif);
+    FilterSpec defaults;
+    defaults.linearization = request.linearization;
+    defaults.iterations = request.iterations;
+    defaults.seif = request.seif;
+    defaults.batch = request.batch;
+    const FilterSpec spec = parseFilterSpec(request.filter, defaults);
+    filter = request.smooth ? makeSmoother(spec, source->info().start_pose, config, request.batch)
+                            : makeFilter(spec, source->info().start_pose, config);
   }
   report.output = runFilter(*filter, *source, progress, request.trajectory_covariances, checkpointing,
                             resume ? &*resume : nullptr);
@@ -167,11 +203,25 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   report.seconds_wall = secondsSince(start);
   report.landmarks = filter->landmarkIds().size();
   report.errors = evaluateRun(*filter, report.info, report.output);
+  if (const SmootherReport* b = filter->smootherReport()) report.smoother = *b;
+  const SlamFilter* filtered = request.smooth ? smoothedFilter(*filter) : nullptr;
+  if (filtered) {
+    RunOutput before = report.output;
+    before.trajectory = report.output.filter_trajectory;
+    report.filter_errors = evaluateRun(*filtered, report.info, before);
+    double sum = 0.0;
+    for (int id : filter->landmarkIds()) sum += (filtered->landmark(id) - filter->landmark(id)).squaredNorm();
+    if (!filter->landmarkIds().empty()) report.filter_map_distance = std::sqrt(sum / static_cast<double>(filter->landmarkIds().size()));
+  }
 
   const auto write_start = Clock::now();
   writeTum(out / "trajectory.tum", report.output.trajectory);
   writeTum(out / "dead_reckoning.tum", report.output.dead_reckoning);
   writeMapCsv(out / "map.csv", *filter, request.map_covariances);  // marginals computed here
+  if (filtered) {
+    writeTum(out / "trajectory_filter.tum", report.output.filter_trajectory);
+    writeMapCsv(out / "map_filter.csv", *filtered, request.map_covariances);
+  }
   if (!report.output.gps.empty()) writeGpsCsv(out / "gps.csv", report.output.gps);  // for `seif plot`
   if (request.trajectory_covariances) {
     writeTrajectoryCovariance(out / "trajectory_cov.csv", report.output.trajectory, report.output.pose_covariances);

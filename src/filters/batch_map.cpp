@@ -1,104 +1,23 @@
+#include "filters/batch_map.hpp"
+
+#include "filters/ekf_slam.hpp"
+#include "filters/seif_slam.hpp"
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
-#include "filters/batch_map.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#include <Eigen/OrderingMethods>
-#include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
 #include <algorithm>
-#include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
-#include <optional>
-#include <sstream>
-#include <stdexcept>
-#include <unordered_map>
+#include <string>
 #include <utility>
 
 namespace seif {
 
 namespace {
 
-constexpr int kMaxIterations = 100;
-constexpr double kStepTolerance = 1e-10;     // max |delta| [m, rad]
-constexpr double kRelativeDecrease = 1e-12;  // of the merit function
-constexpr double kRankTolerance = 1e-12;     // eigenvalues below this * lambda_max are noise-free
-constexpr int kMaxHalvings = 40;
-constexpr double kFeasible = 1e-10;  // max |W^T r| of a converged solution
-constexpr double kDifferenceStep = 1e-5;  // for dU/dx [m, rad]
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-using Triplets = std::vector<Eigen::Triplet<double>>;
-
-template <typename M>
-void addBlock(Triplets& t, Eigen::Index row, Eigen::Index col, const M& m) {
-  for (Eigen::Index j = 0; j < m.cols(); ++j) {
-    for (Eigen::Index i = 0; i < m.rows(); ++i) {
-      if (m(i, j) != 0.0) t.emplace_back(static_cast<int>(row + i), static_cast<int>(col + j), m(i, j));
-    }
-  }
-}
-
-/// x + alpha delta for every pose (heading wrapped) and landmark.
-void applyStep(std::vector<Pose2>& poses, std::vector<Vec2>& landmarks, const Eigen::VectorXd& delta, double alpha) {
-  Eigen::Index i = 0;
-  for (Pose2& x : poses) {
-    x = wrapHeading(Pose2(x + alpha * delta.segment<3>(i)));
-    i += 3;
-  }
-  for (Vec2& y : landmarks) {
-    y += alpha * delta.segment<2>(i);
-    i += 2;
-  }
-}
-
-}  // namespace
-
-struct BatchMap::System {
-  double cost = 0.0;
-  Eigen::VectorXd c;  // constraint values W_k^T r_k
-  Eigen::SparseMatrix<double> kkt;
-  Eigen::VectorXd rhs;  // [-g; -c], g = J^T Omega r
-};
-
-struct BatchMap::Solution {
-  std::vector<Pose2> poses;
-  std::vector<Vec2> landmarks;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu;  // of the KKT matrix
-  Eigen::Index dim = 0;                                // KKT dimension (variables + constraints)
-  mutable std::optional<Eigen::MatrixXd> covariance;  // of [x_T, landmarks]
-};
-
-BatchMap::BatchMap(const Pose2& initial_pose, const FilterConfig& config)
-    : SlamFilter(config),
-      config_(config),
-      start_(initial_pose),
-      inner_(initial_pose,
-             [&] {
-               FilterConfig c = config;  // the batch gates; its EKF sees only what passed
-               c.outlier_gate = std::numeric_limits<double>::infinity();
-               c.linearization = seif::Linearization::Standard;
-               return c;
-             }()),
-      book_("batch", initial_pose, config),
-      guess_{initial_pose},
-      cost_(kNaN),
-      violation_(kNaN) {}
-
-BatchMap::~BatchMap() = default;
-
-void BatchMap::invalidate() {
-  solution_.reset();
-  cost_ = kNaN;
-  iterations_ = 0;
-  violation_ = kNaN;
-}
-
-namespace {
-
-/// The planar rotation by theta acting on a pose increment (x, y rotate, heading stays).
 Mat3 poseRotation(double theta) {
   const double c = std::cos(theta), s = std::sin(theta);
   Mat3 R;
@@ -106,352 +25,348 @@ Mat3 poseRotation(double theta) {
   return R;
 }
 
-/// Its derivative in theta.
-Mat3 poseRotationDerivative(double theta) {
-  const double c = std::cos(theta), s = std::sin(theta);
-  Mat3 D;
-  D << -s, -c, 0, c, -s, 0, 0, 0, 0;
-  return D;
+/// U^+ (the pseudo-inverse of a covariance; a singular one's null space is a constraint).
+Mat3 pseudoInverse(const Mat3& U) {
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(0.5 * (U + U.transpose()));
+  const double tol = 1e-12 * std::max(eig.eigenvalues().maxCoeff(), 1e-300);
+  Mat3 out = Mat3::Zero();
+  for (int i = 0; i < 3; ++i) {
+    if (eig.eigenvalues()(i) > tol) out += eig.eigenvectors().col(i) * eig.eigenvectors().col(i).transpose() / eig.eigenvalues()(i);
+  }
+  return out;
+}
+
+FilterConfig innerConfig(const FilterConfig& config) {
+  FilterConfig c = config;  // the batch gates; its filter sees only what passed
+  c.outlier_gate = std::numeric_limits<double>::infinity();
+  return c;
+}
+
+std::unique_ptr<SlamFilter> makeInner(const Pose2& start, const FilterConfig& config, BatchOptions::Init init) {
+  FilterConfig c = innerConfig(config);
+  c.linearization = Linearization::Standard;
+  c.iterations = 1;
+  switch (init) {
+    case BatchOptions::Init::Ekf: return std::make_unique<EkfSlam>(start, c);
+    case BatchOptions::Init::Seif: return std::make_unique<SeifSlam>(start, c, SeifOptions{});
+    case BatchOptions::Init::Odometry: return nullptr;
+  }
+  return nullptr;
 }
 
 }  // namespace
 
+BatchMap::BatchMap(const Pose2& initial_pose, const FilterConfig& config, const BatchOptions& options)
+    : BatchMap(initial_pose, config, makeInner(initial_pose, config, options.init), options) {
+  init_name_ = std::string(optionName(options.init));
+}
+
+BatchMap::BatchMap(const Pose2& initial_pose, const FilterConfig& config, std::unique_ptr<SlamFilter> filter,
+                   const BatchOptions& options)
+    : SlamFilter(config),
+      config_(config),
+      options_(options),
+      init_name_(filter ? filter->name() : "odometry"),
+      inner_(std::move(filter)),
+      book_("batch", initial_pose, inner_ ? config : innerConfig(config)),  // no gate for odometry alone
+      steps_{StepPose{0, -1, Vec3::Zero(), Mat3::Zero()}},
+      node_step_{0},
+      node_guess_{initial_pose},
+      guess_(initial_pose) {
+  problem_.start = initial_pose;
+  problem_.start_covariance = Mat3(config.initial_pose_sigma.cwiseAbs2().asDiagonal());
+  problem_.motion = &motionModel();
+  problem_.sensor = &sensorModel();
+  problem_.nodes = 1;
+}
+
+BatchMap::~BatchMap() = default;
+
+void BatchMap::invalidate() {
+  solution_.reset();
+  covariance_.reset();
+}
+
+Pose2 BatchMap::currentGuess() const { return inner_ ? inner_->pose() : guess_; }
+
+Vec2 BatchMap::landmarkGuess(int slot) const {
+  if (inner_) return inner_->landmark(book_.ids()[static_cast<std::size_t>(slot)]);
+  return landmark_guess_[static_cast<std::size_t>(slot)];
+}
+
+int BatchMap::closeSegment() {
+  const int k = static_cast<int>(steps_.size()) - 1;
+  if (steps_.back().node >= 0) return steps_.back().node;  // already a node
+  // the open motion ends here: the pose after step k becomes a node
+  const int node = static_cast<int>(node_step_.size());
+  BatchProblem::Motion m;
+  m.from = node_step_.empty() ? 0 : static_cast<int>(node_step_.size()) - 1;
+  m.to = node;
+  m.body = pre_.delta();
+  m.U_body = pre_.covariance();
+  problem_.motions.push_back(m);
+  pre_.reset();
+  steps_.back() = StepPose{node, -1, Vec3::Zero(), Mat3::Zero()};
+  node_step_.push_back(k);
+  node_guess_.push_back(currentGuess());
+  problem_.nodes = static_cast<int>(node_step_.size());
+  return node;
+}
+
+void BatchMap::addBodyStep(const Vec3& body, const Mat3& U_body) {
+  pre_.add(body, U_body);
+  steps_.push_back({-1, static_cast<int>(problem_.motions.size()), pre_.delta(), pre_.covariance()});
+}
+
 void BatchMap::predict(const MotionIncrement& increment) {
-  const Mat3 Rt = poseRotation(inner_.pose()(2)).transpose();
-  inner_.predict(increment);
+  const Mat3 Rt = poseRotation(pose()(2)).transpose();  // linearised by the caller at pose()
   invalidate();
-  inputs_.push_back({std::nullopt, Rt * increment.delta, Rt * increment.U * Rt.transpose()});
-  guess_.push_back(inner_.pose());
+  const Vec3 body = Rt * increment.delta;
+  const Mat3 U_body = Rt * increment.U * Rt.transpose();
+  if (inner_) inner_->predict(increment);
+  guess_ = wrapHeading(Pose2(guess_ + poseRotation(guess_(2)) * body));
+  addBodyStep(body, U_body);
   last_pose_links_ = 0;
 }
 
 void BatchMap::predict(const MotionInput& u) {
-  inner_.predict(u);
   invalidate();
-  inputs_.push_back({u, Vec3::Zero(), Mat3::Zero()});
-  guess_.push_back(inner_.pose());
+  const MotionModel& motion = motionModel();
+  if (motion.equivariant()) {  // a motion in the robot's frame, the same at any pose
+    const Pose2 at = inner_ ? inner_->linearizationPose() : guess_;
+    const MotionIncrement m = motion.linearize(at, u);
+    const Mat3 Rt = poseRotation(at(2)).transpose();
+    if (inner_) inner_->predict(u);
+    const Vec3 body = Rt * m.delta;
+    guess_ = wrapHeading(Pose2(guess_ + poseRotation(guess_(2)) * body));
+    addBodyStep(body, Rt * m.U * Rt.transpose());
+  } else {  // its own pose and a factor relinearised at every iteration
+    const int from = closeSegment();
+    if (inner_) inner_->predict(u);
+    guess_ = motion.apply(guess_, u);
+    BatchProblem::Motion m;
+    m.from = from;
+    m.to = static_cast<int>(node_step_.size());
+    m.input = u;
+    problem_.motions.push_back(m);
+    steps_.push_back({m.to, -1, Vec3::Zero(), Mat3::Zero()});
+    node_step_.push_back(static_cast<int>(steps_.size()) - 1);
+    node_guess_.push_back(currentGuess());
+    problem_.nodes = static_cast<int>(node_step_.size());
+  }
   last_pose_links_ = 0;
 }
 
 void BatchMap::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
   if (&sensor != &sensorModel()) throw ModelError("batch: only the config's sensor is supported");
-  // The EKF's gate, at the inner EKF's estimate: a landmark first seen in this update is
-  // gated at its initialisation from that first sighting, as the EKF does.
-  const std::span<const PlannedObservation> plan = book_.plan(
-      observations, sensor, inner_.pose(), [&](int slot) { return inner_.landmark(book_.ids()[static_cast<std::size_t>(slot)]); });
+  // The filter's gate at its estimate (none from odometry alone): a landmark first seen in
+  // this update is gated at its initialisation from that first sighting, as the EKF does.
+  const std::span<const PlannedObservation> plan =
+      book_.plan(observations, sensor, currentGuess(), [&](int slot) { return landmarkGuess(slot); });
   invalidate();
-  const int k = static_cast<int>(guess_.size()) - 1;
   std::vector<Observation> accepted;
   accepted.reserve(plan.size());
+  int node = -1;
   for (const PlannedObservation& p : plan) {
+    if (node < 0) node = closeSegment();  // an observation: this pose is kept
     if (p.first) {
-      last_linked_pose_.push_back(-1);
+      last_linked_node_.push_back(-1);
       pose_links_.push_back(0);
+      landmark_guess_.push_back(p.initial);
     }
     const auto s = static_cast<std::size_t>(p.slot);
-    if (last_linked_pose_[s] != k) {
-      last_linked_pose_[s] = k;
+    if (last_linked_node_[s] != node) {
+      last_linked_node_[s] = node;
       ++pose_links_[s];
       ++pose_landmark_links_;
       ++last_pose_links_;
     }
-    measurements_.push_back({k, p.slot, p.z->z, sensor.noise(*p.z).inverse()});
+    problem_.measurements.push_back({node, p.slot, p.z->z, sensor.noise(*p.z).inverse()});
     accepted.push_back(*p.z);
   }
   book_.commit();
-  inner_.update(accepted, sensor);
-  guess_.back() = inner_.pose();
+  problem_.landmarks = book_.size();
+  if (inner_) {
+    inner_->update(accepted, sensor);
+    if (node >= 0) node_guess_[static_cast<std::size_t>(node)] = inner_->pose();
+  }
 }
 
 void BatchMap::finish() {
+  closeSegment();  // the last pose is a node
   std::vector<Vec2> landmarks;
   landmarks.reserve(book_.ids().size());
-  for (int id : book_.ids()) landmarks.push_back(inner_.landmark(id));
-  optimizeFrom(guess_, landmarks);
+  for (int s = 0; s < book_.size(); ++s) landmarks.push_back(landmarkGuess(s));
+  solve(node_guess_, landmarks);
 }
 
-Eigen::Index BatchMap::landmarkVar(int slot) const {
-  return 3 * static_cast<Eigen::Index>(inputs_.size() + 1) + 2 * static_cast<Eigen::Index>(slot);
-}
-
-void BatchMap::linearize(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks,
-                         System& out, bool system) const {
-  const Eigen::Index n = 3 * static_cast<Eigen::Index>(poses.size()) + 2 * static_cast<Eigen::Index>(landmarks.size());
-  Triplets A, C;  // C: constraint rows, numbered from 0
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(system ? n : 0);
-  std::vector<double> c;
-  out.cost = 0.0;
-
-  // A Gaussian term r ~ N(0, cov) on a pose-space residual r with Jacobian blocks J_i (3x3)
-  // at variables v_i. cov = V diag(lambda) V^T: weight Omega = V_r diag(1/lambda_r) V_r^T
-  // (the pseudo-inverse) on its range, hard constraints W^T r = 0 on its null space W.
-  // When cov depends on the first variable (dcov: its derivatives), the gradient carries
-  // d(r^T Omega r / 2) = -(Omega r)^T dcov (Omega r) / 2 and the constraint rows
-  // d(W^T r) = W^T dr - W^T dcov Omega r (from dW = -cov^+ dcov W; exact where W^T r = 0),
-  // so that the fixed point is the constrained optimum itself.
-  const auto gaussian = [&](const Vec3& r, const Mat3& cov, const std::array<Mat3, 3>* dcov,
-                            std::initializer_list<std::pair<Eigen::Index, Mat3>> J) {
-    const Eigen::SelfAdjointEigenSolver<Mat3> eig(0.5 * (cov + cov.transpose()));
-    const Vec3& lambda = eig.eigenvalues();
-    const double tol = kRankTolerance * std::max(lambda.maxCoeff(), 1e-300);
-    Mat3 omega = Mat3::Zero();
-    std::vector<Vec3> null;
-    for (int i = 0; i < 3; ++i) {
-      const Vec3 v = eig.eigenvectors().col(i);
-      if (lambda(i) > tol) {
-        omega += v * v.transpose() / lambda(i);
-      } else {
-        null.push_back(v);
-      }
-    }
-    const Vec3 omega_r = omega * r;
-    out.cost += r.dot(omega_r);
-    for (const Vec3& w : null) {
-      c.push_back(w.dot(r));
-      if (!system) continue;
-      const auto row = static_cast<Eigen::Index>(c.size()) - 1;
-      for (const auto& [var, Jv] : J) {
-        Eigen::Matrix<double, 1, 3> d = w.transpose() * Jv;
-        if (dcov && var == J.begin()->first) {
-          for (int i = 0; i < 3; ++i) d(i) -= w.dot((*dcov)[static_cast<std::size_t>(i)] * omega_r);
-        }
-        addBlock(C, row, var, d);
-      }
-    }
-    if (!system) return;
-    for (const auto& [vi, Ji] : J) {
-      g.segment<3>(vi) += Ji.transpose() * omega_r;
-      for (const auto& [vj, Jj] : J) addBlock(A, vi, vj, Mat3(Ji.transpose() * omega * Jj));
-    }
-    if (dcov) {
-      for (int i = 0; i < 3; ++i) {
-        g(J.begin()->first + i) -= 0.5 * omega_r.dot((*dcov)[static_cast<std::size_t>(i)] * omega_r);
-      }
-    }
-  };
-
-  Vec3 r0 = poses.front() - start_;
-  r0(2) = wrapAngle(r0(2));
-  gaussian(r0, Mat3(config_.initial_pose_sigma.cwiseAbs2().asDiagonal()), nullptr, {{0, Mat3::Identity()}});
-
-  // U_k depends on x_k; the MotionModel gives U, not its derivative: central differences.
-  const MotionModel& motion = motionModel();
-  std::array<Mat3, 3> dU;
-  for (std::size_t k = 0; k < inputs_.size(); ++k) {
-    const Motion& step = inputs_[k];
-    MotionIncrement m;
-    if (step.input) {
-      m = motion.linearize(poses[k], *step.input);
-      if (system) {
-        for (int i = 0; i < 3; ++i) {
-          const Vec3 e = kDifferenceStep * Vec3::Unit(i);
-          dU[static_cast<std::size_t>(i)] = (motion.linearize(Pose2(poses[k] + e), *step.input).U -
-                                             motion.linearize(Pose2(poses[k] - e), *step.input).U) /
-                                            (2.0 * kDifferenceStep);
-        }
-      }
-    } else {  // a body-frame motion: Delta = Rot(theta) body, U = Rot U_body Rot^T
-      const Mat3 R = poseRotation(poses[k](2)), D = poseRotationDerivative(poses[k](2));
-      m.delta = R * step.body;
-      m.J_delta_x.col(2) = D * step.body;
-      m.U = R * step.U_body * R.transpose();
-      dU[0].setZero();
-      dU[1].setZero();
-      dU[2] = D * step.U_body * R.transpose() + R * step.U_body * D.transpose();
-    }
-    Vec3 r = poses[k + 1] - poses[k] - m.delta;
-    r(2) = wrapAngle(r(2));
-    const auto i = 3 * static_cast<Eigen::Index>(k);
-    gaussian(r, m.U, system ? &dU : nullptr,
-             {{i, Mat3(-(Mat3::Identity() + m.J_delta_x))}, {i + 3, Mat3::Identity()}});
-  }
-
-  const MeasurementModel& sensor = sensorModel();
-  const Eigen::Index lm0 = 3 * static_cast<Eigen::Index>(poses.size());
-  for (const Measurement& z : measurements_) {
-    Mat23 Jx;
-    Mat2 Jy;
-    const Vec2 zhat = sensor.predict(poses[static_cast<std::size_t>(z.pose)],
-                                     landmarks[static_cast<std::size_t>(z.slot)], &Jx, &Jy);
-    const Vec2 r = sensor.residual(z.z, zhat);  // dr = -(Jx dx + Jy dy)
-    out.cost += r.dot(z.R_inv * r);
-    if (!system) continue;
-    const Eigen::Index p = 3 * static_cast<Eigen::Index>(z.pose);
-    const Eigen::Index l = lm0 + 2 * static_cast<Eigen::Index>(z.slot);
-    g.segment<3>(p) -= Jx.transpose() * z.R_inv * r;
-    g.segment<2>(l) -= Jy.transpose() * z.R_inv * r;
-    const Mat32 xy = Jx.transpose() * z.R_inv * Jy;
-    addBlock(A, p, p, Mat3(Jx.transpose() * z.R_inv * Jx));
-    addBlock(A, p, l, xy);
-    addBlock(A, l, p, Mat23(xy.transpose()));
-    addBlock(A, l, l, Mat2(Jy.transpose() * z.R_inv * Jy));
-  }
-
-  out.c = Eigen::Map<const Eigen::VectorXd>(c.data(), static_cast<Eigen::Index>(c.size()));
-  if (!system) return;
-  const Eigen::Index m = out.c.size();
-  A.reserve(A.size() + 2 * C.size());
-  for (const auto& t : C) {
-    A.emplace_back(static_cast<int>(n + t.row()), t.col(), t.value());
-    A.emplace_back(t.col(), static_cast<int>(n + t.row()), t.value());
-  }
-  out.kkt.resize(n + m, n + m);
-  out.kkt.setFromTriplets(A.begin(), A.end());
-  out.rhs.resize(n + m);
-  out.rhs << -g, -out.c;
-}
-
-void BatchMap::requireSizes(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks) const {
-  if (poses.size() != inputs_.size() + 1 || landmarks.size() != book_.ids().size()) {
-    throw InvalidArgument("batch: needs " + std::to_string(inputs_.size() + 1) + " poses and " +
-                                std::to_string(book_.ids().size()) + " landmarks, got " +
-                                std::to_string(poses.size()) + " and " + std::to_string(landmarks.size()));
-  }
-}
-
-double BatchMap::costAt(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks,
-                        double* violation) const {
-  requireSizes(poses, landmarks);
-  System at;
-  linearize(poses, landmarks, at, false);
-  if (violation) *violation = at.c.size() > 0 ? at.c.lpNorm<Eigen::Infinity>() : 0.0;
-  return at.cost;
-}
-
-void BatchMap::optimizeFrom(const std::vector<Pose2>& poses_in, const std::vector<Vec2>& landmarks_in) {
-  requireSizes(poses_in, landmarks_in);
+void BatchMap::solve(std::vector<Pose2> nodes, std::vector<Vec2> landmarks) {
   invalidate();
-  auto sol = std::make_unique<Solution>();
-  std::vector<Pose2>& poses = sol->poses;
-  std::vector<Vec2>& landmarks = sol->landmarks;
-  poses = poses_in;
-  landmarks = landmarks_in;
-  for (Pose2& x : poses) x = wrapHeading(x);
-  const Eigen::Index n = 3 * static_cast<Eigen::Index>(poses.size()) + 2 * static_cast<Eigen::Index>(landmarks.size());
-
-  const auto fail = [&](const std::string& what, int it, double cost) {
-    std::ostringstream msg;
-    msg << "batch: " << what << " (Gauss-Newton iteration " << it << ", cost " << cost << ")";
-    throw NumericError(msg.str());
-  };
-  // Merit F + mu |c|_1, an exact penalty for mu > 2 |lambda|_inf (the KKT multipliers are
-  // those of F / 2); mu never decreases, so accepted steps decrease one function.
-  double mu = 0.0;
-  const auto merit = [&](const System& l) { return l.cost + mu * l.c.lpNorm<1>(); };
-
-  System lin;
-  linearize(poses, landmarks, lin, true);
-  mu = 1e6 * std::max(1.0, lin.cost);
-  bool done = false;
-  int it = 0;
-  for (;;) {
-    sol->lu.compute(lin.kkt);
-    if (sol->lu.info() != Eigen::Success) fail("the KKT matrix is singular: " + sol->lu.lastErrorMessage(), it, lin.cost);
-    if (done) break;
-    if (it == kMaxIterations) fail("no convergence", it, lin.cost);
-    const Eigen::VectorXd x = sol->lu.solve(lin.rhs);
-    ++it;
-    const Eigen::VectorXd delta = x.head(n);
-    if (!delta.allFinite()) fail("the step is not finite", it, lin.cost);
-    if (delta.lpNorm<Eigen::Infinity>() < kStepTolerance) break;
-    if (x.size() > n) mu = std::max(mu, 4.0 * x.tail(x.size() - n).lpNorm<Eigen::Infinity>());
-    const double merit0 = merit(lin);
-
-    // Step halving until the merit function does not increase.
-    std::vector<Pose2> trial_poses;
-    std::vector<Vec2> trial_landmarks;
-    System trial;
-    double alpha = 1.0, merit_full = kNaN;
-    bool accepted = false;
-    for (int h = 0; h < kMaxHalvings && !accepted; ++h, alpha *= 0.5) {
-      trial_poses = poses;
-      trial_landmarks = landmarks;
-      applyStep(trial_poses, trial_landmarks, delta, alpha);
-      try {
-        linearize(trial_poses, trial_landmarks, trial, false);
-      } catch (const ModelError&) {
-        continue;  // a degenerate measurement geometry: a shorter step
-      }
-      const double m = merit(trial);
-      if (h == 0) merit_full = m;
-      accepted = m <= merit0;
-    }
-    if (!accepted) {
-      // At the optimum to rounding the full step changes nothing measurable.
-      if (std::abs(merit_full - merit0) <= kRelativeDecrease * merit0) break;
-      fail("no step decreases the merit function", it, lin.cost);
-    }
-    poses = std::move(trial_poses);
-    landmarks = std::move(trial_landmarks);
-    const double cost0 = lin.cost;
-    linearize(poses, landmarks, lin, true);
-    // Converged when F stalls on the constraint surface (mu |c|_1 is rounding noise there).
-    done = merit0 - merit(lin) <= kRelativeDecrease * merit0 ||
-           (std::abs(cost0 - lin.cost) <= kRelativeDecrease * cost0 &&
-            (lin.c.size() == 0 || lin.c.lpNorm<Eigen::Infinity>() < kFeasible));
-  }
-  iterations_ = it;
-  cost_ = lin.cost;
-  violation_ = lin.c.size() > 0 ? lin.c.lpNorm<Eigen::Infinity>() : 0.0;
-  sol->dim = lin.kkt.rows();
+  BatchSolveOptions o;
+  o.solver = options_.solver;
+  auto sol = std::make_unique<BatchSolution>(solveBatch(problem_, std::move(nodes), std::move(landmarks), o));
+  const BatchSolveReport& r = sol->report;
+  report_ = SmootherReport{};
+  report_.init = init_name_;
+  report_.poses = static_cast<int>(sol->nodes.size());
+  report_.landmarks = static_cast<int>(sol->landmarks.size());
+  report_.constraints = r.constraints;
+  report_.iterations = r.iterations;
+  report_.costs = r.costs;
+  report_.initial_cost = r.costs.front();
+  report_.final_cost = r.costs.back();
+  report_.gradient_norm = r.gradient_norm;
+  report_.initial_gradient_norm = r.initial_gradient_norm;
+  report_.linearize_seconds = r.seconds_linearize;
+  report_.factorize_seconds = r.seconds_factorize;
+  report_.step_seconds = r.seconds_solve;
+  report_.solve_seconds = r.seconds_linearize + r.seconds_factorize + r.seconds_solve;
+  report_.factor_nonzeros = r.factor_nonzeros;
   solution_ = std::move(sol);
 }
 
-const BatchMap::Solution& BatchMap::solution(const char* what) const {
+std::vector<Pose2> BatchMap::nodePoses(const std::vector<Pose2>& poses) const {
+  std::vector<Pose2> nodes;
+  nodes.reserve(node_step_.size() + 1);
+  for (int k : node_step_) nodes.push_back(poses[static_cast<std::size_t>(k)]);
+  if (steps_.back().node < 0) nodes.push_back(poses.back());  // the open motion's end
+  return nodes;
+}
+
+void BatchMap::requireSizes(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks) const {
+  if (poses.size() != steps_.size() || landmarks.size() != book_.ids().size()) {
+    throw InvalidArgument("batch: needs " + std::to_string(steps_.size()) + " poses and " +
+                          std::to_string(book_.ids().size()) + " landmarks, got " + std::to_string(poses.size()) +
+                          " and " + std::to_string(landmarks.size()));
+  }
+}
+
+void BatchMap::optimizeFrom(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks) {
+  requireSizes(poses, landmarks);
+  closeSegment();
+  solve(nodePoses(poses), landmarks);
+}
+
+double BatchMap::costAt(const std::vector<Pose2>& poses, const std::vector<Vec2>& landmarks, double* violation) const {
+  requireSizes(poses, landmarks);
+  if (steps_.back().node < 0) throw InvalidArgument("batch: costAt() needs the last pose kept (call finish())");
+  return batchCost(problem_, nodePoses(poses), landmarks, violation);
+}
+
+const BatchSolution& BatchMap::solution(const char* what) const {
   if (!solution_) throw InvalidArgument(std::string("batch: ") + what + " needs a solution (call finish())");
   return *solution_;
 }
 
+Pose2 BatchMap::bridge(const StepPose& s, const Pose2& xa, const Pose2& xb) const {
+  const BatchProblem::Motion& m = problem_.motions[static_cast<std::size_t>(s.motion)];
+  const Mat3 Ra = poseRotation(xa(2));
+  Vec3 rel_b = Ra.transpose() * (xb - xa);
+  Vec3 e_b = rel_b - m.body;
+  e_b(2) = wrapAngle(xb(2) - xa(2) - m.body(2));
+  Mat3 T = Mat3::Identity();
+  T(0, 2) = -(m.body(1) - s.p(1));
+  T(1, 2) = m.body(0) - s.p(0);
+  const Vec3 e_k = s.P * T.transpose() * pseudoInverse(m.U_body) * e_b;
+  return wrapHeading(Pose2(xa + Ra * (s.p + e_k)));
+}
+
 std::vector<Pose2> BatchMap::smoothedTrajectory() const {
-  return solution_ ? solution_->poses : std::vector<Pose2>{};
-}
-
-Eigen::MatrixXd BatchMap::kktMarginal(const std::vector<Eigen::Index>& rows) const {
-  // Columns of the KKT inverse by solves with unit right-hand sides, 256 at a time.
-  const Solution& s = solution("a marginal");
-  const auto m = static_cast<Eigen::Index>(rows.size());
-  Eigen::MatrixXd out(m, m);
-  constexpr Eigen::Index kChunk = 256;
-  for (Eigen::Index j0 = 0; j0 < m; j0 += kChunk) {
-    const Eigen::Index w = std::min(kChunk, m - j0);
-    Eigen::MatrixXd E = Eigen::MatrixXd::Zero(s.dim, w);
-    for (Eigen::Index j = 0; j < w; ++j) E(rows[static_cast<std::size_t>(j0 + j)], j) = 1.0;
-    const Eigen::MatrixXd X = s.lu.solve(E);
-    for (Eigen::Index i = 0; i < m; ++i) out.row(i).segment(j0, w) = X.row(rows[static_cast<std::size_t>(i)]);
-  }
-  return 0.5 * (out + out.transpose());
-}
-
-std::vector<Mat3> BatchMap::trajectoryCovariances() const {
-  const Solution& s = solution("trajectoryCovariances()");
-  std::vector<Mat3> out;
-  out.reserve(s.poses.size());
-  for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(s.poses.size()); ++k) {
-    out.push_back(kktMarginal({3 * k, 3 * k + 1, 3 * k + 2}));
+  if (!solution_) return {};
+  const std::vector<Pose2>& nodes = solution_->nodes;
+  std::vector<Pose2> out;
+  out.reserve(steps_.size());
+  for (const StepPose& s : steps_) {
+    if (s.node >= 0) {
+      out.push_back(wrapHeading(nodes[static_cast<std::size_t>(s.node)]));
+    } else {
+      const BatchProblem::Motion& m = problem_.motions[static_cast<std::size_t>(s.motion)];
+      out.push_back(bridge(s, nodes[static_cast<std::size_t>(m.from)], nodes[static_cast<std::size_t>(m.to)]));
+    }
   }
   return out;
 }
 
-Pose2 BatchMap::pose() const { return solution_ ? wrapHeading(solution_->poses.back()) : inner_.pose(); }
+std::vector<Mat3> BatchMap::trajectoryCovariances() const {
+  const BatchSolution& sol = solution("trajectoryCovariances()");
+  std::vector<Mat3> out;
+  out.reserve(steps_.size());
+  int joint_motion = -1;  // the motion whose nodes' joint marginal `joint` holds
+  Eigen::Matrix<double, 6, 6> joint;
+  for (const StepPose& s : steps_) {
+    if (s.node >= 0) {
+      const Eigen::Index v = 3 * static_cast<Eigen::Index>(s.node);
+      out.push_back(sol.marginal({v, v + 1, v + 2}));
+      continue;
+    }
+    const BatchProblem::Motion& m = problem_.motions[static_cast<std::size_t>(s.motion)];
+    const Pose2& xa = sol.nodes[static_cast<std::size_t>(m.from)];
+    const Pose2& xb = sol.nodes[static_cast<std::size_t>(m.to)];
+    if (joint_motion != s.motion) {
+      const Eigen::Index a = 3 * static_cast<Eigen::Index>(m.from), b = 3 * static_cast<Eigen::Index>(m.to);
+      joint = sol.marginal({a, a + 1, a + 2, b, b + 1, b + 2});
+      joint_motion = s.motion;
+    }
+    // J = d bridge / d(x_a, x_b) by central differences; plus the bridge's own spread.
+    Eigen::Matrix<double, 3, 6> J;
+    constexpr double h = 1e-6;
+    for (int i = 0; i < 6; ++i) {
+      Pose2 a1 = xa, a2 = xa, b1 = xb, b2 = xb;
+      if (i < 3) {
+        a1(i) += h;
+        a2(i) -= h;
+      } else {
+        b1(i - 3) += h;
+        b2(i - 3) -= h;
+      }
+      Vec3 d = bridge(s, a1, b1) - bridge(s, a2, b2);
+      d(2) = wrapAngle(d(2));
+      J.col(i) = d / (2.0 * h);
+    }
+    Mat3 T = Mat3::Identity();
+    T(0, 2) = -(m.body(1) - s.p(1));
+    T(1, 2) = m.body(0) - s.p(0);
+    const Mat3 PT = s.P * T.transpose();
+    const Mat3 conditional = s.P - PT * pseudoInverse(m.U_body) * PT.transpose();
+    const Mat3 Ra = poseRotation(xa(2));
+    Mat3 S = J * joint * J.transpose() + Ra * conditional * Ra.transpose();
+    out.push_back(0.5 * (S + S.transpose()));
+  }
+  return out;
+}
+
+Eigen::Index BatchMap::landmarkVar(int slot) const {
+  return 3 * static_cast<Eigen::Index>(solution_->nodes.size()) + 2 * static_cast<Eigen::Index>(slot);
+}
+
+Pose2 BatchMap::pose() const {
+  if (solution_) return wrapHeading(solution_->nodes.back());
+  return currentGuess();
+}
 
 Vec2 BatchMap::landmark(int id) const {
-  if (!solution_) return inner_.landmark(id);
-  return solution_->landmarks[static_cast<std::size_t>(book_.require(id))];
+  const int slot = book_.require(id);
+  if (solution_) return solution_->landmarks[static_cast<std::size_t>(slot)];
+  return landmarkGuess(slot);
 }
 
 Mat3 BatchMap::poseCovariance() const {
-  if (!solution_) return inner_.poseCovariance();
-  if (solution_->covariance) return solution_->covariance->topLeftCorner<3, 3>();
-  const Eigen::Index T = 3 * static_cast<Eigen::Index>(inputs_.size());
-  return kktMarginal({T, T + 1, T + 2});
+  if (!solution_) {
+    if (inner_) return inner_->poseCovariance();
+    throw InvalidArgument("batch: odometry alone has no covariance before finish()");
+  }
+  const Eigen::Index T = 3 * static_cast<Eigen::Index>(solution_->nodes.size() - 1);
+  return solution_->marginal({T, T + 1, T + 2});
 }
 
 Mat2 BatchMap::landmarkCovariance(int id) const {
-  if (!solution_) return inner_.landmarkCovariance(id);
   const int slot = book_.require(id);
-  if (solution_->covariance) return solution_->covariance->block<2, 2>(3 + 2 * slot, 3 + 2 * slot);
+  if (!solution_) {
+    if (inner_) return inner_->landmarkCovariance(id);
+    throw InvalidArgument("batch: odometry alone has no covariance before finish()");
+  }
   const Eigen::Index l = landmarkVar(slot);
-  return kktMarginal({l, l + 1});
+  return solution_->marginal({l, l + 1});
 }
 
 void BatchMap::removeLandmark(int) {
@@ -463,15 +378,18 @@ void BatchMap::mergeLandmarks(int, int) {
 }
 
 Marginal BatchMap::marginal(std::span<const int> landmarks, bool pose, MarginalMode mode) const {
-  if (!solution_) return inner_.marginal(landmarks, pose, mode);
+  if (!solution_) {
+    if (inner_) return inner_->marginal(landmarks, pose, mode);
+    throw InvalidArgument("batch: odometry alone has no marginal before finish()");
+  }
   std::vector<Eigen::Index> rows;
   Marginal m;
   m.mean.resize(static_cast<Eigen::Index>(pose ? 3 + 2 * landmarks.size() : 2 * landmarks.size()));
   Eigen::Index r = 0;
   if (pose) {
-    const Eigen::Index T = 3 * static_cast<Eigen::Index>(inputs_.size());
+    const Eigen::Index T = 3 * static_cast<Eigen::Index>(solution_->nodes.size() - 1);
     for (Eigen::Index i = 0; i < 3; ++i) rows.push_back(T + i);
-    m.mean.head<3>() = solution_->poses.back();
+    m.mean.head<3>() = wrapHeading(solution_->nodes.back());
     r = 3;
   }
   for (int id : landmarks) {
@@ -482,23 +400,29 @@ Marginal BatchMap::marginal(std::span<const int> landmarks, bool pose, MarginalM
     m.mean.segment<2>(r) = solution_->landmarks[static_cast<std::size_t>(slot)];
     r += 2;
   }
-  m.covariance = kktMarginal(rows);
+  m.covariance = solution_->marginal(rows);
   return m;
 }
 
 FilterStats BatchMap::stats() const {
   FilterStats s;
   s.landmarks = book_.ids().size();
-  s.links = inputs_.size() + pose_landmark_links_;
+  s.links = problem_.motions.size() + (pre_.steps() > 0 ? 1 : 0) + pose_landmark_links_;
   s.robot_links = last_pose_links_;
   for (std::size_t n : pose_links_) s.max_landmark_links = std::max(s.max_landmark_links, n);
   return s;
 }
 
 Eigen::VectorXd BatchMap::mean() const {
-  if (!solution_) return inner_.mean();
+  if (!solution_) {
+    if (inner_) return inner_->mean();
+    Eigen::VectorXd mu(3 + 2 * static_cast<Eigen::Index>(book_.size()));
+    mu.head<3>() = guess_;
+    for (int s = 0; s < book_.size(); ++s) mu.segment<2>(3 + 2 * s) = landmark_guess_[static_cast<std::size_t>(s)];
+    return mu;
+  }
   Eigen::VectorXd mu(3 + 2 * static_cast<Eigen::Index>(solution_->landmarks.size()));
-  mu.head<3>() = wrapHeading(solution_->poses.back());
+  mu.head<3>() = wrapHeading(solution_->nodes.back());
   for (std::size_t s = 0; s < solution_->landmarks.size(); ++s) {
     mu.segment<2>(3 + 2 * static_cast<Eigen::Index>(s)) = solution_->landmarks[s];
   }
@@ -506,22 +430,25 @@ Eigen::VectorXd BatchMap::mean() const {
 }
 
 Eigen::MatrixXd BatchMap::covariance() const {
-  if (!solution_) return inner_.covariance();
-  if (!solution_->covariance) {
+  if (!solution_) {
+    if (inner_) return inner_->covariance();
+    throw InvalidArgument("batch: odometry alone has no covariance before finish()");
+  }
+  if (!covariance_) {
     std::vector<Eigen::Index> rows;
-    const Eigen::Index T = 3 * static_cast<Eigen::Index>(inputs_.size());
+    const Eigen::Index T = 3 * static_cast<Eigen::Index>(solution_->nodes.size() - 1);
     for (Eigen::Index i = 0; i < 3; ++i) rows.push_back(T + i);
     for (int s = 0; s < book_.size(); ++s) {
       rows.push_back(landmarkVar(s));
       rows.push_back(landmarkVar(s) + 1);
     }
-    solution_->covariance = kktMarginal(rows);
+    covariance_ = solution_->marginal(rows);
   }
-  return *solution_->covariance;
+  return *covariance_;
 }
 
 Eigen::MatrixXd BatchMap::information() const {
-  if (!solution_) return inner_.information();
+  if (!solution_ && inner_) return inner_->information();
   const Eigen::MatrixXd P = covariance();
   const Eigen::LLT<Eigen::MatrixXd> llt(P);
   if (llt.info() != Eigen::Success) throw NumericError("batch: the marginal covariance is not positive definite");

@@ -71,7 +71,7 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 // here is the one line a flag or a spec error shows.
 void applyProfile(FilterSpec& s, std::string_view v);
 
-const std::array<FilterOption, 14> kOptions = {{
+const std::array<FilterOption, 16> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
      "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=30 "
      "(honest covariances in constant time; README)",
@@ -133,6 +133,16 @@ const std::array<FilterOption, 14> kOptions = {{
     {"seed", kSeif, Opt::Kind::Seed, "", 0, 0, "seed of the random choice of relaxed landmarks",
      [](FilterSpec& s, std::string_view v) { s.seif.seed = parseSeed(v); },
      [](const FilterSpec& s) { return std::to_string(s.seif.seed); }},
+    {"init", Opt::Scope::Batch, kChoice, "ekf|seif|odometry", 0, 0,
+     "where the batch starts: a filter's estimate (the EKF's or the SEIF's, run alongside) or "
+     "odometry alone",
+     [](FilterSpec& s, std::string_view v) { s.batch.init = BatchOptions::parseInit(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.batch.init)); }},
+    {"solver", Opt::Scope::Batch, kChoice, "cholesky|kkt", 0, 0,
+     "the batch's linear solver: sparse Cholesky of the normal equations, or SparseLU of the KKT "
+     "system (the cross-check)",
+     [](FilterSpec& s, std::string_view v) { s.batch.solver = BatchOptions::parseSolver(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.batch.solver)); }},
 }};
 
 void applyProfile(FilterSpec& s, std::string_view v) {
@@ -161,6 +171,7 @@ bool takesOption(std::string_view name, const FilterOption& option) {
   switch (option.scope) {
     case FilterOption::Scope::AllButBatch: return knownFilter(name) && name != "batch";
     case FilterOption::Scope::Seif: return name == "seif";
+    case FilterOption::Scope::Batch: return name == "batch";
   }
   return false;
 }
@@ -252,8 +263,21 @@ std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& star
   if (spec.name == "ekf") return std::make_unique<EkfSlam>(start, c);
   if (spec.name == "eif") return std::make_unique<EifSlam>(start, c);
   if (spec.name == "seif") return std::make_unique<SeifSlam>(start, c, spec.seif);
-  if (spec.name == "batch") return std::make_unique<BatchMap>(start, c);
+  if (spec.name == "batch") return std::make_unique<BatchMap>(start, c, spec.batch);
   throw InvalidArgument("unknown filter '" + spec.name + "' (expected ekf, eif, seif or batch)");
+}
+
+std::unique_ptr<SlamFilter> makeSmoother(const FilterSpec& filter, const Pose2& start, const FilterConfig& config,
+                                         const BatchOptions& options) {
+  if (filter.name == "batch") throw InvalidArgument("--smooth: the batch is a smoother already; smooth after ekf, eif or seif");
+  FilterConfig inner = config;
+  inner.outlier_gate = std::numeric_limits<double>::infinity();  // the smoother gates at its estimate
+  return std::make_unique<BatchMap>(start, config, makeFilter(filter, start, inner), options);
+}
+
+const SlamFilter* smoothedFilter(const SlamFilter& smoother) {
+  const auto* batch = dynamic_cast<const BatchMap*>(&smoother);
+  return batch ? batch->filtered() : nullptr;
 }
 
 std::unique_ptr<SlamFilter> makeFilter(std::string_view spec, const Pose2& start,

@@ -1,6 +1,7 @@
-// The SEIF's option names (include/seif/filters/seif_options.hpp): each enum's spelling in
+// The SEIF's and the batch's option names (seif_options.hpp, batch_options.hpp): each enum's spelling in
 // specs, flags, metrics.json and Python, parsed and printed from one list per enum.
 #include <seif/core/errors.hpp>
+#include <seif/filters/batch_options.hpp>
 #include <seif/filters/seif_options.hpp>
 
 #include <array>
@@ -35,6 +36,8 @@ constexpr Names<SeifOptions::Recovery, 2> kRecovery{"recovery point", {"after-up
 constexpr Names<SeifOptions::RelaxOrder, 2> kRelaxOrder{"relaxation order", {"random", "cyclic"}};
 constexpr Names<SeifOptions::Sparsify, 2> kSparsify{"sparsification", {"seif", "eseif"}};
 constexpr Names<SeifOptions::Covariance, 2> kCovariance{"covariance recovery", {"exact", "local"}};
+constexpr Names<BatchOptions::Init, 3> kBatchInit{"batch start", {"ekf", "seif", "odometry"}};
+constexpr Names<BatchOptions::Solver, 2> kBatchSolver{"batch solver", {"cholesky", "kkt"}};
 
 }  // namespace
 
@@ -51,5 +54,10 @@ std::string_view optionName(SeifOptions::Recovery v) { return kRecovery.name(v);
 std::string_view optionName(SeifOptions::RelaxOrder v) { return kRelaxOrder.name(v); }
 std::string_view optionName(SeifOptions::Sparsify v) { return kSparsify.name(v); }
 std::string_view optionName(SeifOptions::Covariance v) { return kCovariance.name(v); }
+
+BatchOptions::Init BatchOptions::parseInit(std::string_view s) { return kBatchInit.parse(s); }
+BatchOptions::Solver BatchOptions::parseSolver(std::string_view s) { return kBatchSolver.parse(s); }
+std::string_view optionName(BatchOptions::Init v) { return kBatchInit.name(v); }
+std::string_view optionName(BatchOptions::Solver v) { return kBatchSolver.name(v); }
 
 }  // namespace seif

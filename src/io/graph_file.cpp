@@ -75,7 +75,7 @@ std::string firstTag(const fs::path& path) {
 class GraphSource final : public EventSource {
  public:
   GraphSource(GraphFormat format, TextTable table, TextTable peek, std::size_t bytes, const DatasetOptions& options)
-      : format_(format), table_(std::move(table)), bytes_(bytes) {
+      : format_(format), table_(std::move(table)), bytes_(bytes), gtsam_landmarks_(options.isam_landmarks_as_gtsam) {
     const char* name = format == GraphFormat::Isam ? "isam" : "g2o";
     checkNoiseNames(options, {}, name);
     if (options.noise_form) throw InvalidArgument(std::string("the ") + name + " format has no noise form: its records carry covariances");
@@ -131,7 +131,10 @@ class GraphSource final : public EventSource {
         break;
       }
     }
-    if (sensor_ == Sensor::RangeBearing) {
+    if (gtsam_landmarks_ && (format_ != GraphFormat::Isam || sensor_ != Sensor::Cartesian)) {
+      throw InvalidArgument(table_.name() + ": GTSAM's reading applies to iSAM LANDMARK records, and this file has none");
+    }
+    if (sensor_ == Sensor::RangeBearing || gtsam_landmarks_) {
       info_.sensor = std::make_shared<RangeBearingModel>(1.0, 1.0);  // each record has its own
     } else {
       info_.sensor = std::make_shared<CartesianModel>(Mat2::Identity());  // each record has its own
@@ -195,6 +198,13 @@ class GraphSource final : public EventSource {
       table_.expect({isam ? "LANDMARK" : "EDGE_SE2_XY", "pose", "landmark", "x", "y", "m11", "m12", "m22"});
       z.z = Vec2(table_.real(3), table_.real(4));
       z.noise = recordCovariance<2>(table_, 5, !isam);
+      if (gtsam_landmarks_) {  // GTSAM's loader: bearing-range, sigma_b = sqrt(m11 / 10), sigma_r = sqrt(m11)
+        const double range = z.z.norm();
+        if (!(range > 0.0)) table_.fail("a landmark at the pose itself has no bearing (GTSAM's reading)");
+        const double v = (*z.noise)(0, 0);
+        z.z = Vec2(range, std::atan2(table_.real(4), table_.real(3)));
+        z.noise = diagonalNoise(std::sqrt(v), std::sqrt(v / 10.0));
+      }
     }
     if (kind != sensor_) {
       table_.fail("a file holds one kind of landmark observation: this " + std::string(table_.field(0)) +
@@ -244,6 +254,7 @@ class GraphSource final : public EventSource {
   GraphFormat format_;
   TextTable table_;
   std::size_t bytes_;
+  bool gtsam_landmarks_;  // DatasetOptions::isam_landmarks_as_gtsam
   DatasetInfo info_;
   Sensor sensor_ = Sensor::None;
   std::unordered_map<long long, Kind> kinds_;

@@ -22,6 +22,9 @@ namespace seif {
 struct RunOutput {
   std::size_t steps = 0;
   std::vector<TimedPose> trajectory;  ///< the start pose, then the pose after every step
+  /// A smoother's: the trajectory of its estimates while streaming (the filter it runs
+  /// alongside), which finish() replaced in `trajectory` by the smoothed one.
+  std::vector<TimedPose> filter_trajectory;
   std::vector<double> step_seconds;   ///< wall time of every step (predict + update)
   /// The pose covariance beside every trajectory pose, when asked for (runFilter's
   /// pose_covariances): the filter's poseCovariance() after each step (its cost: see

@@ -6,11 +6,13 @@
 //   map.csv         id, x, y and the landmark's 2x2 marginal covariance
 //   metrics.json    timing, structure, errors (keys in docs/outputs.md and below)
 //   gps.csv         time, x, y of the dataset's GPS fixes, when it has any
+//   trajectory_filter.tum, map_filter.csv  with `smooth`: the filter's, before the batch
 // Errors: ATE and map error against ground truth when the dataset has it (after the best
 // rigid 2-D alignment and as estimated); gps_rmse and dead_reckoning_gps_rmse against GPS
 // when the dataset has it (trajectory interpolated at the GPS stamps inside its span, after
 // the best rigid 2-D alignment, metres).
 #include <seif/eval/run.hpp>
+#include <seif/filters/batch_options.hpp>
 #include <seif/filters/seif_options.hpp>
 #include <seif/io/event_source.hpp>
 
@@ -31,6 +33,10 @@ struct RunRequest {
   Linearization linearization = Linearization::Standard;
   int iterations = 1;
   SeifOptions seif;
+  BatchOptions batch;
+  /// Run `filter`, then the batch MAP from its estimate (makeSmoother): the outputs are the
+  /// smoothed ones, the filter's are written beside them and compared.
+  bool smooth = false;
   bool map_covariances = true;  ///< map.csv with each landmark's exact marginal covariance
   /// trajectory_cov.csv: the pose covariance after every step (SEIF: one factorisation per
   /// step with covariance=exact; O(1) with covariance=local).
@@ -60,6 +66,9 @@ struct RunReport {
   RunOutput output;
   RunErrors errors;
   std::size_t landmarks = 0;
+  std::optional<SmootherReport> smoother;     ///< a smoother's solve
+  std::optional<RunErrors> filter_errors;     ///< with `smooth`: the filter's, before the batch
+  std::optional<double> filter_map_distance;  ///< with `smooth`: RMS distance of the filter's map from the batch's [m]
   double seconds_wall = 0.0;     ///< open, read and filter
   double seconds_outputs = 0.0;  ///< trajectory, map with covariances, metrics
 };

@@ -1,6 +1,7 @@
 #pragma once
 // Builds any filter from its spec: a name ("ekf", "eif", "seif", "batch") and options,
 // "seif:sparsify=eseif,linearization=fej" (the form `--filter` and `--filters` take).
+#include <seif/filters/batch_options.hpp>
 #include <seif/filters/seif_options.hpp>
 #include <seif/filters/slam_filter.hpp>
 
@@ -20,13 +21,14 @@ struct FilterSpec {
   Linearization linearization = Linearization::Standard;
   int iterations = 1;  ///< FilterConfig::iterations
   SeifOptions seif;
+  BatchOptions batch;
 };
 
 /// One option of the filters. The table of them (filterOptions()) is the single description
 /// the spec parser, the CLI's flags (`--<key>`), metrics.json ("filter_spec" and the "seif"
 /// object) and Python's names (the key with '_' for '-') all come from.
 struct FilterOption {
-  enum class Scope { AllButBatch, Seif };  ///< which filters take it
+  enum class Scope { AllButBatch, Seif, Batch };  ///< which filters take it
   /// Length: a finite number >= 0 [m]. Profile: a spec-only shorthand that sets other
   /// options (the keys after it in the spec override it); the canonical spec, the flags and
   /// metrics.json list the options it set, not it.
@@ -74,6 +76,14 @@ std::vector<std::string> splitFilterList(std::string_view list);
 
 /// Throws InvalidArgument for an unknown name, listing the valid ones.
 std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& start, const FilterConfig& config);
+
+/// The batch MAP smoother after `filter` (`seif run --smooth`): the filter runs alongside it
+/// (its outlier gate is the smoother's), gives the estimates while streaming, and its final
+/// trajectory and map start the smoother's solve at finish(). smootherReport()->init names it.
+std::unique_ptr<SlamFilter> makeSmoother(const FilterSpec& filter, const Pose2& start, const FilterConfig& config,
+                                         const BatchOptions& options = {});
+/// The filter a smoother made by makeSmoother() runs alongside (null for any other filter).
+const SlamFilter* smoothedFilter(const SlamFilter& smoother);
 
 /// makeFilter(parseFilterSpec(spec, config.linearization, seif_options), start, config).
 std::unique_ptr<SlamFilter> makeFilter(std::string_view spec, const Pose2& start,

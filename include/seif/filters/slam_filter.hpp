@@ -5,6 +5,7 @@
 // Known data association: observations carry landmark ids; an id seen for the first time
 // is added to the map. Unknown association builds on predictMeasurement().
 #include <seif/core/types.hpp>
+#include <seif/filters/batch_options.hpp>
 #include <seif/models/measurement_model.hpp>
 #include <seif/models/motion_model.hpp>
 
@@ -139,6 +140,8 @@ class SlamFilter {
   virtual std::vector<Mat3> smoothedTrajectoryCovariances() const { return {}; }
   /// True for a smoother: its estimates mean something only after finish().
   virtual bool smoother() const { return false; }
+  /// A smoother's last solve (after finish()); null for a filter or before a solve.
+  virtual const SmootherReport* smootherReport() const { return nullptr; }
 
   /// Writes this filter's whole state to a checkpoint (filters/checkpoint.hpp: saveCheckpoint;
   /// seif::load reads it back). Throws InvalidArgument for the batch MAP smoother.
@@ -213,9 +216,10 @@ class SlamFilter {
   virtual Eigen::MatrixXd covariance() const = 0;
   virtual Eigen::MatrixXd information() const = 0;
 
- protected:
   /// The pose the convenience predict() linearises at (the filter's own, unwrapped).
   virtual Pose2 linearizationPose() const { return pose(); }
+
+ protected:
   /// Indices into the state vector of the pose (when `pose`) and of the landmark slots.
   static std::vector<Eigen::Index> stateIndices(std::span<const int> slots, bool pose);
 

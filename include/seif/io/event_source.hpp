@@ -54,6 +54,11 @@ struct DatasetOptions {
   /// The form of a rate-driven motion model's noise (velocity_model.hpp); the format's
   /// default when empty (simulated MRCLAM folders: per-step; recorded logs: rate).
   std::optional<NoiseForm> noise_form;
+  /// iSAM `LANDMARK x y m11 m12 m22`: Cartesian (false: the point with its covariance), or
+  /// as GTSAM's loader reads it (true): bearing atan2(y, x) and range hypot(x, y) with
+  /// sigma_bearing = sqrt(m11 / 10) and sigma_range = sqrt(m11) (its heuristic), so that a
+  /// cost is comparable with GTSAM's on the same file.
+  bool isam_landmarks_as_gtsam = false;
 };
 
 class EventSource {

@@ -26,6 +26,7 @@ class AckermannModel final : public MotionModel {
 
   std::string describe() const override;
   MotionIncrement linearize(const Pose2& x, const MotionInput& u) const override;
+  bool equivariant() const override { return true; }
   MotionIncrement linearize(const Pose2& x, const AckermannControl& u) const;
 
   /// (vc, w) of input u, with d(vc, w)/d(ve, alpha) when J is given. Throws ModelError where

@@ -23,6 +23,11 @@ class MotionModel {
   /// The increment of input u at pose x. Throws ModelError when u is not this model's
   /// input type or is not finite.
   virtual MotionIncrement linearize(const Pose2& x, const MotionInput& u) const = 0;
+  /// True when every increment is a fixed motion in the robot's frame: Delta(x, u) =
+  /// Rot(theta) Delta_body(u) and U(x, u) = Rot(theta) U_body(u) Rot(theta)^T, whatever x
+  /// (the velocity, Ackermann and odometry models). The batch MAP then composes the steps
+  /// between observations into one (preintegration) instead of keeping a pose per step.
+  virtual bool equivariant() const { return false; }
   /// x + Delta(x, u), heading wrapped to (-pi, pi] (dead reckoning).
   Pose2 apply(const Pose2& x, const MotionInput& u) const;
 };

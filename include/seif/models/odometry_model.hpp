@@ -10,6 +10,7 @@ class OdometryModel final : public MotionModel {
  public:
   std::string describe() const override;
   MotionIncrement linearize(const Pose2& x, const MotionInput& u) const override;
+  bool equivariant() const override { return true; }
   MotionIncrement linearize(const Pose2& x, const OdometryIncrement& u) const;
 };
 

@@ -26,6 +26,7 @@ class VelocityModel final : public MotionModel {
 
   std::string describe() const override;
   MotionIncrement linearize(const Pose2& x, const MotionInput& u) const override;
+  bool equivariant() const override { return true; }
   MotionIncrement linearize(const Pose2& x, const VelocityControl& u) const;
 
   double sigmaV() const { return sigma_v_; }

@@ -1,0 +1,34 @@
+#include "filters/preintegration.hpp"
+
+#include <cmath>
+
+namespace seif {
+
+void Preintegration::add(const Vec3& b, const Mat3& U_b) {
+  if (steps_ == 0) {  // exactly the step itself
+    delta_ = b;
+    U_ = U_b;
+    steps_ = 1;
+    return;
+  }
+  const double c = std::cos(delta_(2)), s = std::sin(delta_(2));
+  Mat3 R;
+  R << c, -s, 0, s, c, 0, 0, 0, 1;
+  const Vec3 step = R * b;
+  Mat3 F = Mat3::Identity();
+  F(0, 2) = -step(1);
+  F(1, 2) = step(0);
+  U_ = F * U_ * F.transpose() + R * U_b * R.transpose();
+  U_ = 0.5 * (U_ + U_.transpose());
+  delta_ += step;
+  ++steps_;
+}
+
+Mat3 Preintegration::transitionFrom(const Vec3& p_k) const {
+  Mat3 T = Mat3::Identity();
+  T(0, 2) = -(delta_(1) - p_k(1));
+  T(1, 2) = delta_(0) - p_k(0);
+  return T;
+}
+
+}  // namespace seif
