@@ -103,6 +103,10 @@ void run(const RunArgs& args) {
                 b.init.c_str(), b.poses, b.landmarks, b.constraints, b.initial_cost, b.final_cost, b.iterations,
                 b.solve_seconds, b.linearize_seconds, b.factorize_seconds, b.step_seconds, b.gradient_norm,
                 b.initial_gradient_norm);
+    if (!b.converged) {
+      std::printf("  WARNING: the batch stopped at its iteration limit without converging (from %s: try another --init)\n",
+                  b.init.c_str());
+    }
   }
   if (r.filter_errors) {
     const RunErrors& f = *r.filter_errors;

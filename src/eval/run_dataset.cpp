@@ -84,6 +84,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
                   {"landmarks", b.landmarks},
                   {"constraints", b.constraints},
                   {"iterations", b.iterations},
+                  {"converged", b.converged},
                   {"initial_cost", b.initial_cost},
                   {"final_cost", b.final_cost},
                   {"gradient_norm", b.gradient_norm},

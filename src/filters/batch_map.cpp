@@ -212,6 +212,7 @@ void BatchMap::solve(std::vector<Pose2> nodes, std::vector<Vec2> landmarks) {
   report_.landmarks = static_cast<int>(sol->landmarks.size());
   report_.constraints = r.constraints;
   report_.iterations = r.iterations;
+  report_.converged = r.converged;
   report_.costs = r.costs;
   report_.initial_cost = r.costs.front();
   report_.final_cost = r.costs.back();

@@ -22,7 +22,10 @@ namespace seif {
 
 namespace {
 
-constexpr double kRankTolerance = 1e-12;   // eigenvalues below this * lambda_max are noise-free
+// Eigenvalues of a U below this * its largest are noise-free (constraints): a standard deviation
+// under 3e-5 of the largest, whose weight double-precision Gauss-Newton cannot use (Victoria
+// Park's preintegrated straight runs reach 1e-15: as weights they stall the solve).
+constexpr double kRankTolerance = 1e-9;
 constexpr double kStepTolerance = 1e-10;   // max |delta| [m, rad]
 constexpr double kFeasible = 1e-10;        // max |W^T r| of a converged solution
 constexpr double kMeritStall = 1e-15;      // predicted relative decrease of the merit that ends the solve
@@ -31,6 +34,7 @@ constexpr double kRounding = 1e-11;        // ... a step is taken unless the mer
 constexpr double kDifferenceStep = 1e-5;   // dU/dx of input-form factors [m, rad]
 constexpr double kUzawaTolerance = 1e-13;  // max |C delta + c| of a solved KKT step (relative)
 constexpr int kUzawaIterations = 200;
+constexpr double kUndamped = 1e-3;         // mu below which a step's multipliers are trusted
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
 using Clock = std::chrono::steady_clock;
@@ -91,15 +95,15 @@ void linearize(const BatchProblem& p, const std::vector<Pose2>& nodes, const std
   const auto gaussian = [&](const Vec3& r, const Mat3& cov, const std::array<Mat3, 3>* dcov, Eigen::Index v0,
                             const Mat3& J0, Eigen::Index v1, const Mat3& J1) {
     const Eigen::SelfAdjointEigenSolver<Mat3> eig(0.5 * (cov + cov.transpose()));
-    const Vec3& lambda = eig.eigenvalues();
-    const double tol = kRankTolerance * std::max(lambda.maxCoeff(), 1e-300);
+    const Vec3& eigenvalues = eig.eigenvalues();
+    const double tol = kRankTolerance * std::max(eigenvalues.maxCoeff(), 1e-300);
     Mat3 omega = Mat3::Zero();
     std::array<Vec3, 3> null;
     int nulls = 0;
     for (int i = 0; i < 3; ++i) {
       const Vec3 v = eig.eigenvectors().col(i);
-      if (lambda(i) > tol) {
-        omega += v * v.transpose() / lambda(i);
+      if (eigenvalues(i) > tol) {
+        omega += v * v.transpose() / eigenvalues(i);
       } else {
         null[static_cast<std::size_t>(nulls++)] = v;
       }
@@ -230,11 +234,12 @@ void applyStep(std::vector<Pose2>& nodes, std::vector<Vec2>& landmarks, const Ei
 /// analysis of either is done on the first call.
 class StepSolver {
  public:
-  StepSolver(BatchSolver kind, double rho) : kind_(kind), rho_(rho) {}
+  explicit StepSolver(BatchSolver kind) : kind_(kind) {}
 
   /// Factorises M (and the KKT matrix); false when it is not positive definite / singular.
-  bool factorize(const SpMat& M, const SpMat& C) {
+  bool factorize(const SpMat& M, const SpMat& C, double rho) {
     C_ = &C;
+    rho_ = rho;
     if (kind_ == BatchSolver::Cholesky || C.rows() == 0) {
       if (analysed_nonzeros_ != M.nonZeros()) {  // once: the pattern is the same at every iterate
         llt_.analyzePattern(M);
@@ -294,7 +299,7 @@ class StepSolver {
 
  private:
   BatchSolver kind_;
-  double rho_;
+  double rho_ = 0.0;
   Eigen::Index analysed_nonzeros_ = -1;
   const SpMat* C_ = nullptr;
   Eigen::SimplicialLLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> llt_;
@@ -397,26 +402,19 @@ BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, 
   const auto m = static_cast<Eigen::Index>(lin.c.size());  // the rank of every U is the same at every iterate
   rep.constraints = static_cast<int>(m);
 
-  // rho: far above A's curvature, so that Uzawa contracts fast; the Gauss-Newton matrix of
-  // the augmented Lagrangian keeps the constrained directions positive definite.
-  const double diag_max = std::max(lin.A.diagonal().maxCoeff(), 1e-300);
-  const double rho = m > 0 ? 1e4 * diag_max : 0.0;
-  StepSolver solver(options.solver, rho);
-  const auto augmented = [&](const Linearization& l) {
+  // rho (per iteration): far above the curvature of A + mu D, so that Uzawa contracts fast;
+  // rho C^T C keeps the constrained directions of the left-hand side positive definite.
+  StepSolver solver(options.solver);
+  const auto augmented = [&](const Linearization& l, double rho) {
     SpMat M = l.A;
     if (m > 0) M += rho * SpMat(l.C.transpose() * l.C);
     return M;
   };
-  const auto gradient = [&](const Linearization& l) {  // of F/2 + rho/2 |c|^2
-    Eigen::VectorXd g = l.g;
-    if (m > 0) g += rho * (l.C.transpose() * asVector(l.c));
-    return g;
-  };
+  const auto rhoFor = [&](const SpMat& A) { return m > 0 ? 1e4 * std::max(A.diagonal().maxCoeff(), 1e-300) : 0.0; };
 
   double nu = 0.0;  // exact-penalty weight of |c|_1 in the merit (F/2 + nu |c|_1)
   const auto merit = [&](const Linearization& l) { return 0.5 * l.cost + nu * sumAbs(l.c); };
   Eigen::VectorXd lambda = Eigen::VectorXd::Zero(m);
-  SpMat M = augmented(lin);
   // Marquardt's scaling: D = diag(A) (not rho C^T C: the constrained directions are fixed by
   // C delta = -c, not damped), kept at its largest so far; mu is dimensionless.
   Eigen::VectorXd diag = lin.A.diagonal().cwiseMax(1e-6).cwiseMin(1e32);
@@ -427,12 +425,14 @@ BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, 
 
   bool converged = false;
   while (!converged) {
-    if (rep.iterations >= options.max_iterations) fail("no convergence", lin.cost);
+    if (rep.iterations >= options.max_iterations) break;  // reported: rep.converged stays false
     ++rep.iterations;
     t = Clock::now();
-    SpMat Md = M;
+    SpMat Md = lin.A;
     for (Eigen::Index i = 0; i < n; ++i) Md.coeffRef(i, i) += mu * diag(i);
-    const bool ok = solver.factorize(Md, lin.C);
+    const double rho = rhoFor(Md);
+    if (m > 0) Md += rho * SpMat(lin.C.transpose() * lin.C);
+    const bool ok = solver.factorize(Md, lin.C, rho);
     rep.seconds_factorize += secondsSince(t);
     if (!ok) {  // lost positive definiteness to rounding: more damping
       mu *= mu_growth;
@@ -443,12 +443,16 @@ BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, 
     t = Clock::now();
     if (static_cast<Eigen::Index>(lin.c.size()) != m) fail("a process noise changed its rank during the solve", lin.cost);
     const Eigen::VectorXd c = asVector(lin.c);
-    const Eigen::VectorXd g_aug = gradient(lin);
+    Eigen::VectorXd g_aug = lin.g;  // of F/2 + rho/2 |c|^2
+    if (m > 0) g_aug += rho * (lin.C.transpose() * c);
     Eigen::VectorXd lambda_step = lambda;
     const Eigen::VectorXd delta = solver.solve(-g_aug, c, lambda_step);
     rep.seconds_solve += secondsSince(t);
     if (!delta.allFinite()) fail("the step is not finite", lin.cost);
-    if (m > 0) nu = std::max(nu, 2.0 * lambda_step.lpNorm<Eigen::Infinity>());
+    // Heavy damping inflates the multipliers (the step's restoration is made expensive): the
+    // penalty weight and the Newton curvature take them only from nearly undamped steps.
+    const bool undamped = mu <= kUndamped;
+    if (m > 0 && undamped) nu = std::max(nu, 2.0 * lambda_step.lpNorm<Eigen::Infinity>());
     const double merit0 = merit(lin);
 
     // Predicted decrease of the merit under the Gauss-Newton model (the step meets the
@@ -477,11 +481,10 @@ BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, 
       mu_growth = 2.0;
       nodes = std::move(trial_nodes);
       landmarks = std::move(trial_landmarks);
-      lambda = lambda_step;
+      if (undamped) lambda = lambda_step;
       t = Clock::now();
       linearize(problem, nodes, landmarks, lin, true);
       rep.seconds_linearize += secondsSince(t);
-      M = augmented(lin);
       diag = diag.cwiseMax(lin.A.diagonal().cwiseMax(1e-6).cwiseMin(1e32));
       ++rep.accepted;
       rep.costs.push_back(0.5 * lin.cost);
@@ -498,6 +501,7 @@ BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, 
       if (!std::isfinite(mu) || mu > 1e32) fail("no step decreases the merit function", lin.cost);
     }
   }
+  rep.converged = converged;
   rep.violation = maxAbs(lin.c);
 
   // The gradient of F/2 at the solution, projected on the constraints (minus C^T lambda); the
@@ -512,7 +516,7 @@ BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, 
   }
   rep.gradient_norm = projected.norm();
   sol.covariance_ = std::make_unique<BatchSolution::Covariance>();
-  sol.covariance_->A_aug = std::move(M);
+  sol.covariance_->A_aug = augmented(lin, rhoFor(lin.A));
   sol.covariance_->C = std::move(lin.C);
   rep.factor_nonzeros = solver.factorNonZeros();
   sol.nodes = std::move(nodes);

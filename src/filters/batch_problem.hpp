@@ -8,8 +8,8 @@
 //          with covariance Rot U_B Rot^T, written in the frame where U_B is constant), or
 //   input: r = x_b - x_a - Delta(x_a, u),  U = U(x_a, u)   (a motion model relinearised at x_a,
 //          dU/dx by central differences: models that are not equivariant),
-// heading wrapped. U may be singular: its range is weighted by U^+, its null space W is a hard
-// constraint W^T r = 0 (exact, no epsilon). Both forms have det U independent of x_a, so F is
+// heading wrapped. U may be singular: its range is weighted by U^+, its null space W (the
+// eigenvectors of eigenvalues below 1e-9 of the largest) is a hard constraint W^T r = 0. Both forms have det U independent of x_a, so F is
 // the exact negative log-likelihood.
 //
 // Solver: Levenberg-Marquardt on the Gauss-Newton model. Each iteration solves
@@ -72,6 +72,7 @@ struct BatchSolveOptions {
 
 /// What a solve did: costs as 0.5 chi-square (GTSAM's error()), times per phase.
 struct BatchSolveReport {
+  bool converged = false;      ///< false: stopped at max_iterations (the best point so far)
   int iterations = 0;          ///< linear solves (accepted and rejected steps)
   int accepted = 0;
   std::vector<double> costs;   ///< 0.5 F after each accepted step, the start first
@@ -111,8 +112,9 @@ class BatchSolution {
 double batchCost(const BatchProblem& problem, const std::vector<Pose2>& nodes, const std::vector<Vec2>& landmarks,
                  double* violation = nullptr);
 
-/// Levenberg-Marquardt from (nodes, landmarks). Throws NumericError when it does not converge
-/// or a factorisation fails.
+/// Levenberg-Marquardt from (nodes, landmarks); after max_iterations the best point so far,
+/// with report.converged false. Throws NumericError when no step decreases the merit or a
+/// factorisation fails.
 BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, std::vector<Vec2> landmarks,
                          const BatchSolveOptions& options = {});
 

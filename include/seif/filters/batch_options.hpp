@@ -33,6 +33,7 @@ struct SmootherReport {
   int poses = 0;               ///< poses solved for (one per observation instant, the start, the end)
   int landmarks = 0;
   int constraints = 0;         ///< noise-free directions held exactly
+  bool converged = true;       ///< false: stopped at the iteration limit (200), the best point so far
   int iterations = 0;          ///< linear solves (Levenberg-Marquardt steps tried)
   double initial_cost = 0.0;
   double final_cost = 0.0;
