@@ -7,10 +7,15 @@
 #include "filters/batch_map.hpp"
 #include "filters/eif_slam.hpp"
 #include "filters/ekf_slam.hpp"
+#include "filters/preintegration.hpp"
+#include <seif/models/ackermann_model.hpp>
+#include <seif/models/odometry_model.hpp>
+#include <seif/models/velocity_model.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/models/range_bearing.hpp>
 #include <seif/sim/world.hpp>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
@@ -263,6 +268,206 @@ TEST(BatchMap, RunFilterReportsTheSmoothedTrajectory) {
   EXPECT_EQ(filter->pose(), smoothed.back());
   EXPECT_EQ(out.final_stats.landmarks, filter->landmarkIds().size());
   EXPECT_GT(out.final_stats.links, p.data.steps.size());
+}
+
+}  // namespace
+
+namespace {
+
+Mat3 rotation(double theta) {
+  Mat3 R = Mat3::Identity();
+  R.topLeftCorner<2, 2>() = Eigen::Rotation2Dd(theta).toRotationMatrix();
+  return R;
+}
+
+/// Each model with inputs that turn, speed up and stop.
+struct ModelCase {
+  std::string name;
+  std::shared_ptr<MotionModel> model;
+  std::vector<MotionInput> inputs;
+};
+
+std::vector<ModelCase> motionCases() {
+  std::vector<ModelCase> cases;
+  ModelCase v{"velocity", std::make_shared<VelocityModel>(0.05, 0.02, NoiseForm::PerStep), {}};
+  ModelCase a{"ackermann", std::make_shared<AckermannModel>(AckermannGeometry{2.83, 0.76, Vec2(3.78, 0.5)}, 0.08, 0.005,
+                                                            NoiseForm::Rate), {}};
+  ModelCase o{"odometry", std::make_shared<OdometryModel>(), {}};
+  for (int k = 0; k < 12; ++k) {
+    v.inputs.emplace_back(VelocityControl{0.5 + 0.05 * k, 0.3 * std::sin(0.4 * k), 0.1});
+    a.inputs.emplace_back(AckermannControl{k == 5 ? 0.0 : 3.0 + 0.2 * k, 0.2 * std::cos(0.3 * k), 0.025});
+    OdometryIncrement u;
+    u.delta = Vec3(0.2 + 0.01 * k, 0.02 * std::sin(k), 0.05 * std::cos(0.7 * k));
+    u.covariance << 1e-4, 2e-6, 1e-6, 2e-6, 4e-6, 0.0, 1e-6, 0.0, 4e-6;
+    o.inputs.emplace_back(u);
+  }
+  cases.push_back(v);
+  cases.push_back(a);
+  cases.push_back(o);
+  return cases;
+}
+
+TEST(MotionModels, AreEquivariantWhereTheySaySo) {
+  // Delta(x, u) = Rot(theta) Delta_body(u), U(x, u) = Rot U_body Rot^T at any pose: what lets
+  // the batch compose the steps between observations.
+  for (const ModelCase& c : motionCases()) {
+    ASSERT_TRUE(c.model->equivariant()) << c.name;
+    for (const MotionInput& u : c.inputs) {
+      const Pose2 x1(0.0, 0.0, 0.0), x2(-3.0, 7.5, 2.4);
+      const MotionIncrement m1 = c.model->linearize(x1, u), m2 = c.model->linearize(x2, u);
+      const Mat3 R = rotation(x2(2));
+      EXPECT_LT((R * m1.delta - m2.delta).norm(), 1e-12) << c.name;
+      EXPECT_LT((R * m1.U * R.transpose() - m2.U).norm(), 1e-12 * (1.0 + m2.U.norm())) << c.name;
+    }
+  }
+}
+
+TEST(Preintegration, EqualsSteppingTheModelsPrediction) {
+  // The composed increment and covariance against the EKF's prediction stepped through the
+  // same inputs from a certain pose x_a: x_b = x_a + Rot(theta_a) B, P_b = Rot U_B Rot^T.
+  for (const ModelCase& c : motionCases()) {
+    const Pose2 xa(1.5, -2.0, 0.9);
+    Pose2 x = xa;
+    Mat3 P = Mat3::Zero();
+    Preintegration pre;
+    for (const MotionInput& u : c.inputs) {
+      const MotionIncrement m = c.model->linearize(x, u);
+      const Mat3 Rt = rotation(x(2)).transpose();
+      pre.add(Rt * m.delta, Rt * m.U * Rt.transpose());
+      const Mat3 G = Mat3::Identity() + m.J_delta_x;
+      P = G * P * G.transpose() + m.U;
+      x += m.delta;
+    }
+    const Mat3 Ra = rotation(xa(2));
+    EXPECT_EQ(pre.steps(), static_cast<int>(c.inputs.size()));
+    EXPECT_LT((xa + Ra * pre.delta() - x).norm(), 1e-12) << c.name;
+    EXPECT_LT((Ra * pre.covariance() * Ra.transpose() - P).norm(), 1e-12 * P.norm()) << c.name;
+    const Eigen::SelfAdjointEigenSolver<Mat3> eig(pre.covariance());
+    EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0) << c.name << ": several steps of rank-2 noise are full rank";
+  }
+}
+
+/// The same model, declared not equivariant: the batch then keeps a pose per step.
+class PerStepModel final : public MotionModel {
+ public:
+  explicit PerStepModel(std::shared_ptr<const MotionModel> m) : m_(std::move(m)) {}
+  std::string describe() const override { return m_->describe(); }
+  MotionIncrement linearize(const Pose2& x, const MotionInput& u) const override { return m_->linearize(x, u); }
+
+ private:
+  std::shared_ptr<const MotionModel> m_;
+};
+
+/// The composed and the one-pose-per-step batch on the paper world with the motion noise
+/// scaled by `scale`, observations on every fourth step: their largest landmark and pose
+/// differences, as a fraction of the smallest landmark standard deviation.
+struct PreintegrationGap {
+  double landmark = 0.0, pose = 0.0, covariance = 0.0;
+};
+
+PreintegrationGap preintegrationGap(double scale) {
+  WorldConfig world = presetConfig(WorldPreset::Paper, 0, 0, 4);
+  world.noise.sigma_v *= scale;
+  world.noise.sigma_w *= scale;
+  const Dataset data = buildDataset(simulate(world));
+  const FilterConfig config = paperFilterConfig(data.noise.value_or(world.noise));
+  FilterConfig per_step = config;
+  per_step.motion = std::make_shared<PerStepModel>(config.motion);
+  const Pose2 start = startPose(data);
+  BatchMap composed(start, config), full(start, per_step);
+  for (std::size_t k = 0; k < data.steps.size(); ++k) {
+    const Step& s = data.steps[k];
+    const std::span<const Observation> z = k % 4 == 3 ? std::span<const Observation>(s.observations) : std::span<const Observation>();
+    composed.step(s.u, z);
+    full.step(s.u, z);
+  }
+  composed.finish();
+  full.finish();
+  EXPECT_LT(composed.nodes(), static_cast<int>(data.steps.size()) / 3);
+  EXPECT_EQ(full.nodes(), static_cast<int>(data.steps.size()) + 1);
+  PreintegrationGap gap;
+  double sigma_min = 1e300;
+  for (int id : full.landmarkIds()) {
+    gap.landmark = std::max(gap.landmark, (composed.landmark(id) - full.landmark(id)).norm());
+    sigma_min = std::min(sigma_min, std::sqrt(full.landmarkCovariance(id).eigenvalues().real().minCoeff()));
+  }
+  const std::vector<Pose2> a = composed.smoothedTrajectory(), b = full.smoothedTrajectory();
+  EXPECT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) gap.pose = std::max(gap.pose, (a[k] - b[k]).head<2>().norm());
+  // The bridge's covariances: positive definite, near the per-step batch's marginals.
+  const std::vector<Mat3> Pa = composed.trajectoryCovariances(), Pb = full.trajectoryCovariances();
+  EXPECT_EQ(Pa.size(), Pb.size());
+  for (std::size_t k = 0; k < Pa.size(); ++k) {
+    EXPECT_GT(Pa[k].eigenvalues().real().minCoeff(), 0.0) << "step " << k;
+    gap.covariance = std::max(gap.covariance, relDiff(Pa[k], Pb[k]));
+  }
+  gap.landmark /= sigma_min;
+  gap.pose /= sigma_min;
+  std::printf("motion noise x%g: %d nodes composed, %d one per step; largest difference landmark %.3g sigma, pose %.3g "
+              "sigma, pose covariance %.3g relative\n",
+              scale, composed.nodes(), full.nodes(), gap.landmark, gap.pose, gap.covariance);
+  return gap;
+}
+
+TEST(BatchMap, PreintegratedEqualsOnePosePerStepToSecondOrder) {
+  // Observations on every fourth step: the batch composes the steps between them, linearising
+  // the motion noise about the nominal path, and bridges the poses between its nodes. Against
+  // one pose per step the difference is second order in the noise: with the paper's heading
+  // noise (0.03 rad per step) a tenth of a landmark's sigma, and a quarter of the noise cuts it
+  // (relative to sigma) about fourfold.
+  const PreintegrationGap paper = preintegrationGap(1.0), quarter = preintegrationGap(0.25);
+  EXPECT_LT(paper.landmark, 0.25);
+  EXPECT_LT(paper.pose, 0.5);
+  EXPECT_LT(paper.covariance, 0.05);
+  EXPECT_LT(quarter.landmark, paper.landmark / 2.5);
+  EXPECT_LT(quarter.pose, paper.pose / 2.5);
+}
+
+TEST(BatchMap, CholeskyAndKktPathsReachTheSameOptimumOnThePaperWorld) {
+  // The damped normal equations (Uzawa for the rank-2 motion's constraints) against SparseLU
+  // of the whole KKT system; the gradient of the cost at the solution, projected on the
+  // constraints, against the start's.
+  for (PaperPath path : {PaperPath::Lawnmower, PaperPath::Lissajous}) {
+    const PaperData p = paperData(11, path);
+    BatchOptions kkt;
+    kkt.solver = BatchOptions::Solver::Kkt;
+    BatchMap a(p.start, p.config), b(p.start, p.config, kkt);
+    runFilter(a, p.data);
+    runFilter(b, p.data);
+    const SmootherReport& r = *a.smootherReport();
+    std::printf("%s: %d poses, %d constraints, 0.5 chi2 %.10g / %.10g, |gradient| %.3g of %.3g\n",
+                std::string(paperPathName(path)).c_str(), r.poses, r.constraints, r.final_cost,
+                b.smootherReport()->final_cost, r.gradient_norm, r.initial_gradient_norm);
+    EXPECT_TRUE(r.converged);
+    EXPECT_GT(r.constraints, 0);
+    EXPECT_LT(r.gradient_norm, 1e-9 * r.initial_gradient_norm);
+    EXPECT_LT(b.smootherReport()->gradient_norm, 1e-9 * b.smootherReport()->initial_gradient_norm);
+    EXPECT_LT(a.constraintViolation(), 1e-10);
+    double worst = 0.0;
+    for (int id : a.landmarkIds()) worst = std::max(worst, (a.landmark(id) - b.landmark(id)).cwiseAbs().maxCoeff());
+    const std::vector<Pose2> ta = a.smoothedTrajectory(), tb = b.smoothedTrajectory();
+    for (std::size_t k = 0; k < ta.size(); ++k) worst = std::max(worst, (ta[k] - tb[k]).head<2>().cwiseAbs().maxCoeff());
+    std::printf("  largest difference Cholesky - KKT: %.3g m\n", worst);
+    EXPECT_LT(worst, 1e-8);
+    EXPECT_LT(relDiff(a.covariance(), b.covariance()), 1e-8);
+  }
+}
+
+TEST(BatchMap, StartsFromOdometryOrTheSeif) {
+  const PaperData p = paperData(5, PaperPath::Lawnmower);
+  BatchMap ekf(p.start, p.config);
+  runFilter(ekf, p.data);
+  for (BatchOptions::Init init : {BatchOptions::Init::Seif, BatchOptions::Init::Odometry}) {
+    BatchOptions o;
+    o.init = init;
+    BatchMap batch(p.start, p.config, o);
+    runFilter(batch, p.data);
+    EXPECT_EQ(batch.smootherReport()->init, std::string(optionName(init)));
+    EXPECT_TRUE(batch.smootherReport()->converged);
+    EXPECT_NEAR(batch.cost(), ekf.cost(), 1e-9 * ekf.cost()) << optionName(init);
+    EXPECT_LT(batch.smootherReport()->costs.back(), batch.smootherReport()->costs.front());
+  }
+  EXPECT_EQ(makeFilter("batch:init=odometry", p.start, p.config)->smootherReport(), nullptr);  // before a solve
 }
 
 }  // namespace

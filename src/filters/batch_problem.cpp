@@ -516,7 +516,9 @@ BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, 
   }
   rep.gradient_norm = projected.norm();
   sol.covariance_ = std::make_unique<BatchSolution::Covariance>();
-  sol.covariance_->A_aug = augmented(lin, rhoFor(lin.A));
+  // rho of the order of A: any rho > 0 gives the same Sigma; a large one would only make
+  // M^-1 - X S^-1 X^T cancel more digits.
+  sol.covariance_->A_aug = augmented(lin, rhoFor(lin.A) * 1e-4);
   sol.covariance_->C = std::move(lin.C);
   rep.factor_nonzeros = solver.factorNonZeros();
   sol.nodes = std::move(nodes);
