@@ -28,6 +28,8 @@ void bindRun(py::module_& m) {
                         "trajectory_array() etc. give numpy arrays.")
       .def_readonly("steps", &RunOutput::steps)
       .def_readonly("trajectory", &RunOutput::trajectory, "start pose, then the pose after every step")
+      .def_readonly("filter_trajectory", &RunOutput::filter_trajectory,
+                    "a smoother's: the estimates while streaming, before finish() smoothed them")
       .def_readonly("step_seconds", &RunOutput::step_seconds)
       .def_readonly("pose_covariances", &RunOutput::pose_covariances)
       .def_readonly("seconds", &RunOutput::seconds)
@@ -82,6 +84,8 @@ void bindRun(py::module_& m) {
       .def_readwrite("filter", &RunRequest::filter, "filter spec, e.g. 'seif:sparsify=eseif'")
       .def_readwrite("outlier_gate", &RunRequest::outlier_gate)
       .def_readwrite("seif", &RunRequest::seif, "SeifOptions (spec options override them)")
+      .def_readwrite("batch", &RunRequest::batch, "BatchOptions of the batch and of smooth (spec options override them)")
+      .def_readwrite("smooth", &RunRequest::smooth, "run the filter, then the batch MAP from its estimate")
       .def_readwrite("linearization", &RunRequest::linearization, "default linearization (the spec's overrides it)")
       .def_readwrite("iterations", &RunRequest::iterations, "default iterations (the spec's overrides it)")
       .def_readwrite("map_covariances", &RunRequest::map_covariances)
@@ -97,6 +101,10 @@ void bindRun(py::module_& m) {
       .def_readonly("output", &RunReport::output)
       .def_readonly("errors", &RunReport::errors)
       .def_readonly("landmarks", &RunReport::landmarks)
+      .def_readonly("smoother", &RunReport::smoother, "SmootherReport of a batch or smooth run, else None")
+      .def_readonly("filter_errors", &RunReport::filter_errors, "smooth: the filter's errors before the batch")
+      .def_readonly("filter_map_distance", &RunReport::filter_map_distance,
+                    "smooth: RMS distance of the filter's map from the batch's [m]")
       .def_readonly("seconds_wall", &RunReport::seconds_wall)
       .def_readonly("seconds_outputs", &RunReport::seconds_outputs);
 

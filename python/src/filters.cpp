@@ -72,6 +72,48 @@ void bindSeifOptions(py::module_& m) {
       });
 }
 
+void bindBatchOptions(py::module_& m) {
+  py::class_<BatchOptions> o(m, "BatchOptions",
+                             "The batch MAP smoother's options (filters/batch_options.hpp): where it starts and its "
+                             "linear solver. Enum fields take the enum or its name, e.g. options.init = 'seif'.");
+  bindNamedEnum<BatchOptions::Init>(o, "Init", "'ekf' | 'seif' | 'odometry'", &BatchOptions::parseInit,
+                                    &nameOf<BatchOptions::Init>)
+      .value("Ekf", BatchOptions::Init::Ekf)
+      .value("Seif", BatchOptions::Init::Seif)
+      .value("Odometry", BatchOptions::Init::Odometry);
+  bindNamedEnum<BatchOptions::Solver>(o, "Solver", "'cholesky' | 'kkt'", &BatchOptions::parseSolver,
+                                      &nameOf<BatchOptions::Solver>)
+      .value("Cholesky", BatchOptions::Solver::Cholesky)
+      .value("Kkt", BatchOptions::Solver::Kkt);
+  o.def(py::init<>())
+      .def_readwrite("init", &BatchOptions::init, "the start: a filter run alongside (ekf, seif) or odometry alone")
+      .def_readwrite("solver", &BatchOptions::solver, "cholesky (normal equations) or kkt (SparseLU, the cross-check)")
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"init", "solver"}); });
+
+  py::class_<SmootherReport>(m, "SmootherReport",
+                             "A smoother's last solve; costs are 0.5 chi-square (GTSAM's error()).")
+      .def_readonly("init", &SmootherReport::init)
+      .def_readonly("poses", &SmootherReport::poses)
+      .def_readonly("landmarks", &SmootherReport::landmarks)
+      .def_readonly("constraints", &SmootherReport::constraints)
+      .def_readonly("converged", &SmootherReport::converged)
+      .def_readonly("iterations", &SmootherReport::iterations)
+      .def_readonly("initial_cost", &SmootherReport::initial_cost)
+      .def_readonly("final_cost", &SmootherReport::final_cost)
+      .def_readonly("costs", &SmootherReport::costs)
+      .def_readonly("gradient_norm", &SmootherReport::gradient_norm)
+      .def_readonly("initial_gradient_norm", &SmootherReport::initial_gradient_norm)
+      .def_readonly("solve_seconds", &SmootherReport::solve_seconds)
+      .def_readonly("linearize_seconds", &SmootherReport::linearize_seconds)
+      .def_readonly("factorize_seconds", &SmootherReport::factorize_seconds)
+      .def_readonly("step_seconds", &SmootherReport::step_seconds)
+      .def_readonly("factor_nonzeros", &SmootherReport::factor_nonzeros)
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"init", "poses", "landmarks", "constraints", "converged", "iterations", "initial_cost",
+                          "final_cost", "solve_seconds"});
+      });
+}
+
 void bindConfig(py::module_& m) {
   bindNamedEnum<Linearization>(m, "Linearization",
                                "Where Jacobians are evaluated: Standard (newest estimates), FirstEstimates "
@@ -141,6 +183,7 @@ void bindConfig(py::module_& m) {
       .def_readwrite("linearization", &FilterSpec::linearization)
       .def_readwrite("iterations", &FilterSpec::iterations)
       .def_readwrite("seif", &FilterSpec::seif)
+      .def_readwrite("batch", &FilterSpec::batch)
       .def("__repr__", [](py::handle s) { return reprOf(s, {"text", "name", "linearization", "iterations", "seif"}); });
   m.def("parse_filter_spec", py::overload_cast<std::string_view, Linearization, const SeifOptions&>(&parseFilterSpec), py::arg("text"), py::arg("linearization") = Linearization::Standard,
         py::arg("seif") = SeifOptions{},
@@ -209,6 +252,10 @@ void bindSlamFilter(py::module_& m) {
       .def("finish", &SlamFilter::finish, py::call_guard<py::gil_scoped_release>(),
            "Call once after the last step (the batch MAP solves here; a filter does nothing).")
       .def_property_readonly("smoother", &SlamFilter::smoother)
+      .def_property_readonly("smoother_report", [](const SlamFilter& f) -> std::optional<SmootherReport> {
+        if (const SmootherReport* r = f.smootherReport()) return *r;
+        return std::nullopt;
+      }, "A smoother's last solve (SmootherReport), None for a filter or before finish().")
       .def("smoothed_trajectory", &SlamFilter::smoothedTrajectory, "A smoother's poses after finish(); [] for a filter.")
       .def("smoothed_trajectory_covariances", &SlamFilter::smoothedTrajectoryCovariances)
       .def_property_readonly("motion_model", [](const SlamFilter& f) { return f.motionModel().describe(); },
@@ -296,11 +343,23 @@ void bindSlamFilter(py::module_& m) {
       .def_property_readonly("eseif_deferrals", &SeifSlam::eseifDeferrals)
       .def_property_readonly("eseif_fallbacks", &SeifSlam::eseifFallbacks);
   py::class_<BatchMap, SlamFilter>(m, "BatchMap", "The batch MAP smoother: estimates are final after finish().")
-      .def(py::init<const Pose2&, const FilterConfig&>(), py::arg("start"), py::arg("config"))
-      .def_property_readonly("cost", &BatchMap::cost)
+      .def(py::init<const Pose2&, const FilterConfig&, const BatchOptions&>(), py::arg("start"), py::arg("config"),
+           py::arg("options") = BatchOptions{})
+      .def_property_readonly("cost", &BatchMap::cost, "chi-square at the solution")
+      .def_property_readonly("nodes", &BatchMap::nodes, "poses solved for (observation instants, the start, the end)")
+      .def("trajectory_covariances", &BatchMap::trajectoryCovariances, py::call_guard<py::gil_scoped_release>(),
+           "the marginal covariance of the pose after every step")
       .def_property_readonly("iterations", &BatchMap::iterations)
       .def_property_readonly("constraint_violation", &BatchMap::constraintViolation);
 
+  m.def(
+      "make_smoother",
+      [](const std::string& spec, const Pose2& start, const FilterConfig& config, const BatchOptions& options) {
+        return makeSmoother(parseFilterSpec(spec, config.linearization), start, config, options);
+      },
+      py::arg("filter"), py::arg("start"), py::arg("config"), py::arg("options") = BatchOptions{},
+      "The batch MAP after the filter `filter` (a spec): the filter runs alongside, and finish() solves from its "
+      "estimate (`seif run --smooth`).");
   m.def(
       "make_filter",
       [](const std::string& spec, const Pose2& start, const FilterConfig& config, const SeifOptions& seif) {
@@ -317,6 +376,7 @@ void bindSlamFilter(py::module_& m) {
 
 void bindFilters(py::module_& m) {
   bindSeifOptions(m);
+  bindBatchOptions(m);
   bindConfig(m);
   bindSlamFilter(m);
 }

@@ -56,14 +56,16 @@ void bindSources(py::module_& m) {
 
   py::class_<DatasetOptions>(m, "DatasetOptions", "What a reader opens with (io/event_source.hpp).")
       .def(py::init([](int robot, const std::map<std::string, double>& noise, const std::optional<NoiseForm>& form) {
-             return DatasetOptions{robot, noise, form};
+             return DatasetOptions{robot, noise, form, false};
            }),
            py::arg("robot") = 1, py::arg("noise") = std::map<std::string, double>{},
            py::arg("noise_form") = py::none())
       .def_readwrite("robot", &DatasetOptions::robot, "MRCLAM: which robot's log")
       .def_readwrite("noise", &DatasetOptions::noise, "noise overrides by name, e.g. {'sigma_v': 0.05}")
       .def_readwrite("noise_form", &DatasetOptions::noise_form, "NoiseForm, or None for the format's default")
-      .def("__repr__", [](py::handle s) { return reprOf(s, {"robot", "noise", "noise_form"}); });
+      .def_readwrite("isam_landmarks_as_gtsam", &DatasetOptions::isam_landmarks_as_gtsam,
+                     "iSAM LANDMARK records read as GTSAM's loader does (bearing-range, its heuristic noise)")
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"robot", "noise", "noise_form", "isam_landmarks_as_gtsam"}); });
 
   py::class_<EventSource>(m, "EventSource",
                           "A dataset streamed as time-ordered events: iterate it for ControlEvent, "

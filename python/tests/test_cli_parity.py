@@ -122,3 +122,26 @@ def test_paper_python_equals_cli(cli, tmp_path):
     assert "ekf" in report.summary_text()
     assert any(f.get("filter_spec") == seif.canonical_filter_spec(seif.parse_filter_spec("seif:sparsify=eseif"))
                for f in results["filters"])
+
+
+def test_smooth_python_equals_cli(cli, simulated_folder, tmp_path):
+    """`seif run --smooth` and RunRequest.smooth: the same smoothed and filtered outputs, the same solve."""
+    cli_dir, py_dir = tmp_path / "cli", tmp_path / "py"
+    cli_dir.mkdir()
+    py_dir.mkdir()
+    run_cli(cli, "run", "--dataset", simulated_folder, "--filter", "seif", "--smooth", "--out", cli_dir, *LIBRARY_BETA)
+    request = seif.RunRequest(str(simulated_folder), "seif")
+    request.smooth = True
+    report = seif.run_dataset(request, str(py_dir))
+    for name in ("trajectory.tum", "map.csv", "trajectory_filter.tum", "map_filter.csv"):
+        assert (cli_dir / name).read_bytes() == (py_dir / name).read_bytes(), name
+    cli_metrics = json.loads((cli_dir / "metrics.json").read_text())
+    py_metrics = json.loads((py_dir / "metrics.json").read_text())
+    for key in ("init", "poses", "constraints", "iterations", "costs", "final_cost", "converged"):
+        assert cli_metrics["batch"][key] == py_metrics["batch"][key], key
+    assert cli_metrics["filter_before_smoothing"] == py_metrics["filter_before_smoothing"]
+    assert report.smoother.init == "seif"
+    assert report.smoother.final_cost == py_metrics["batch"]["final_cost"] < report.smoother.initial_cost
+    assert report.filter_map_distance == py_metrics["filter_before_smoothing"]["map_distance_to_batch"] > 0
+    assert report.filter_errors.ate == py_metrics["filter_before_smoothing"]["ate_rmse"]
+    assert len(report.output.filter_trajectory) == len(report.output.trajectory)

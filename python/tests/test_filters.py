@@ -161,22 +161,58 @@ def test_the_option_table_names_every_option_once():
     each SEIF option is an attribute of SeifOptions, and a canonical spec parses back."""
     rows = seif.filter_options()
     assert len({r["key"] for r in rows}) == len(rows)
-    options = seif.SeifOptions()
+    owners = {("seif",): seif.SeifOptions(), ("batch",): seif.BatchOptions()}
     for row in rows:
         if row["profile"]:  # a shorthand for other options
             spec = seif.parse_filter_spec("seif:profile=" + row["choices"])
             assert seif.canonical_filter_spec(spec).startswith("seif:linearization=invariant,iterations=2")
             continue
-        owner = options if row["filters"] == ("seif",) else seif.FilterSpec()
+        owner = owners.get(row["filters"], seif.FilterSpec())
         assert hasattr(owner, row["attribute"]), row
         value = getattr(owner, row["attribute"])
         assert str(getattr(value, "text", value)) == row["default"], row
         if row["choices"]:
+            name = "batch" if row["filters"] == ("batch",) else "seif"
             for choice in row["choices"].split("|"):
-                spec = seif.parse_filter_spec(f"seif:{row['key']}={choice}")
-                assert seif.parse_filter_spec(seif.canonical_filter_spec(spec)).seif.__repr__() == spec.seif.__repr__()
+                spec = seif.parse_filter_spec(f"{name}:{row['key']}={choice}")
+                back = seif.parse_filter_spec(seif.canonical_filter_spec(spec))
+                assert getattr(back, name).__repr__() == getattr(spec, name).__repr__()
+                if row["filters"] == ("batch",):
+                    assert getattr(back.batch, row["attribute"]).text == choice
     spec = seif.parse_filter_spec("seif:active=4,relax-order=random,seed=3")
     canonical = seif.canonical_filter_spec(spec)
     assert canonical.startswith("seif:linearization=standard,") and "relax-order=random" in canonical
     back = seif.parse_filter_spec(canonical)
     assert (back.seif.active, back.seif.seed, back.seif.relax_order.text) == (4, 3, "random")
+
+
+def test_batch_options_and_report(paper_world):
+    """The batch's start and solver from Python, its report after finish()."""
+    data, world = paper_world
+    start = seif.start_pose(data)
+    config = paper_config(world)
+    costs = {}
+    for init in ("ekf", "seif", "odometry"):
+        options = seif.BatchOptions()
+        options.init = init
+        batch = seif.BatchMap(start, config, options)
+        assert batch.smoother_report is None
+        for step in data.steps:
+            batch.step(step.u, step.observations)
+        batch.finish()
+        report = batch.smoother_report
+        assert report.init == init and report.converged
+        assert report.costs[0] == report.initial_cost > report.final_cost == report.costs[-1]
+        assert report.poses == batch.nodes <= len(data.steps) + 1
+        assert len(batch.trajectory_covariances()) == len(data.steps) + 1
+        costs[init] = report.final_cost
+    assert costs["seif"] == pytest.approx(costs["ekf"], rel=1e-9)
+    assert costs["odometry"] == pytest.approx(costs["ekf"], rel=1e-9)
+    spec = seif.parse_filter_spec("batch:init=seif,solver=kkt")
+    assert str(spec.batch.init) in ("Init.Seif", "seif") or spec.batch.init == seif.BatchOptions.Init.Seif
+    smoother = seif.make_smoother("ekf", start, config)
+    for step in data.steps:
+        smoother.step(step.u, step.observations)
+    smoother.finish()
+    assert smoother.smoother_report.init == "ekf"
+    assert smoother.smoother_report.final_cost == pytest.approx(costs["ekf"], rel=1e-9)
