@@ -34,6 +34,9 @@ constexpr double kRounding = 1e-11;        // ... a step is taken unless the mer
 constexpr double kDifferenceStep = 1e-5;   // dU/dx of input-form factors [m, rad]
 constexpr double kUzawaTolerance = 1e-13;  // max |C delta + c| of a solved KKT step (relative)
 constexpr int kUzawaIterations = 200;
+// rho / max diag(A + mu D): Uzawa contracts by about 1 / kRho per iteration, and M's condition
+// grows by kRho (1e4 made the corridor's KKT factor inexact enough to stop early).
+constexpr double kRho = 1e2;
 constexpr double kUndamped = 1e-3;         // mu below which a step's multipliers are trusted
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
@@ -410,7 +413,7 @@ BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, 
     if (m > 0) M += rho * SpMat(l.C.transpose() * l.C);
     return M;
   };
-  const auto rhoFor = [&](const SpMat& A) { return m > 0 ? 1e4 * std::max(A.diagonal().maxCoeff(), 1e-300) : 0.0; };
+  const auto rhoFor = [&](const SpMat& A) { return m > 0 ? kRho * std::max(A.diagonal().maxCoeff(), 1e-300) : 0.0; };
 
   double nu = 0.0;  // exact-penalty weight of |c|_1 in the merit (F/2 + nu |c|_1)
   const auto merit = [&](const Linearization& l) { return 0.5 * l.cost + nu * sumAbs(l.c); };
@@ -518,7 +521,7 @@ BatchSolution solveBatch(const BatchProblem& problem, std::vector<Pose2> nodes, 
   sol.covariance_ = std::make_unique<BatchSolution::Covariance>();
   // rho of the order of A: any rho > 0 gives the same Sigma; a large one would only make
   // M^-1 - X S^-1 X^T cancel more digits.
-  sol.covariance_->A_aug = augmented(lin, rhoFor(lin.A) * 1e-4);
+  sol.covariance_->A_aug = augmented(lin, rhoFor(lin.A) / kRho);
   sol.covariance_->C = std::move(lin.C);
   rep.factor_nonzeros = solver.factorNonZeros();
   sol.nodes = std::move(nodes);
