@@ -76,7 +76,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"dropped", dropped},
   };
   if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
-  j["smooth"] = request.smooth;
+  if (request.smooth) j["smooth"] = true;
   if (r.smoother) {
     const SmootherReport& b = *r.smoother;
     j["batch"] = {{"init", b.init},
