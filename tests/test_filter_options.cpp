@@ -53,7 +53,8 @@ TEST(FilterOptions, KeysAreUniqueAndEveryValueRoundTrips) {
     keys.emplace_back(o.key);
     EXPECT_FALSE(o.help.empty()) << o.key;
     for (const std::string& value : valuesOf(o)) {
-      const std::string text = "seif:" + std::string(o.key) + "=" + value;
+      const std::string name = o.scope == FilterOption::Scope::Batch ? "batch:" : "seif:";
+      const std::string text = name + std::string(o.key) + "=" + value;
       const FilterSpec s = seif::parseFilterSpec(text);
       if (o.kind == FilterOption::Kind::Profile) {  // a shorthand: it sets other keys
         EXPECT_EQ(allValues(s), allValues(seif::parseFilterSpec("seif:" + std::string(seif::kConsistentProfile))));
@@ -89,7 +90,7 @@ TEST(FilterOptions, TheCanonicalSpecParsesBackToTheSameFilter) {
       EXPECT_EQ(canonical.find(std::string(o.key) + "=") != std::string::npos, listed) << canonical << " / " << o.key;
     }
   }
-  EXPECT_EQ(seif::canonicalFilterSpec(seif::parseFilterSpec("batch")), "batch");
+  EXPECT_EQ(seif::canonicalFilterSpec(seif::parseFilterSpec("batch")), "batch:init=ekf,solver=cholesky");
 }
 
 TEST(FilterOptions, AProfileIsOverriddenByTheKeysAfterIt) {

@@ -187,8 +187,8 @@ void addRunCommand(CLI::App& app) {
                   "checkpoint's, the steps it consumed are skipped, and the outputs equal those of\n"
                   "the uninterrupted run");
   cmd->add_flag("--smooth", args->smooth,
-                 "after the filter, the batch MAP from the filter's estimate (--init/--solver set\n"
-                 "it up): the smoothed trajectory and map are the outputs, the filter's are written\n"
+                 "after the filter, the batch MAP from the filter's estimate (the batch's flags below\n"
+                 "set its solver): the smoothed trajectory and map are the outputs, the filter's are written\n"
                  "beside them (trajectory_filter.tum, map_filter.csv) and compared in metrics.json");
   args->noise.add(*cmd);
   args->options.add(*cmd, /*batch=*/true);

@@ -192,6 +192,9 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
     defaults.seif = request.seif;
     defaults.batch = request.batch;
     const FilterSpec spec = parseFilterSpec(request.filter, defaults);
+    if (request.checkpoint_every > 0 && (request.smooth || spec.name == "batch")) {
+      throw InvalidArgument("checkpoints: the batch MAP (and --smooth) keeps every measurement and has no checkpoint");
+    }
     filter = request.smooth ? makeSmoother(spec, source->info().start_pose, config, request.batch)
                             : makeFilter(spec, source->info().start_pose, config);
   }
