@@ -21,6 +21,16 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+/// `filter` (a spec) with the request's flags as the defaults of the options it does not set.
+FilterSpec requestedSpec(const RunRequest& request, std::string_view filter) {
+  FilterSpec defaults;
+  defaults.linearization = request.linearization;
+  defaults.iterations = request.iterations;
+  defaults.seif = request.seif;
+  defaults.batch = request.batch;
+  return parseFilterSpec(filter, defaults);
+}
+
 nlohmann::json optionalJson(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
 
 std::string metricsJson(const RunRequest& request, const RunReport& r) {
@@ -105,14 +115,8 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
                                     {"gps_median_error", optionalJson(f.gps_median)},
                                     {"map_distance_to_batch", optionalJson(r.filter_map_distance)}};
   }
-  // The configuration the filter ran with: the flags' as the spec's own options override
-  // them, written as a spec that parses back to it.
-  FilterSpec defaults;
-  defaults.linearization = request.linearization;
-  defaults.iterations = request.iterations;
-  defaults.seif = request.seif;
-  defaults.batch = request.batch;
-  const FilterSpec spec = parseFilterSpec(r.filter, defaults);
+  // The configuration the filter ran with, written as a spec that parses back to it.
+  const FilterSpec spec = requestedSpec(request, r.filter);
   j["filter_spec"] = canonicalFilterSpec(spec);
   if (spec.name == "seif") j["seif"] = toJson(spec.seif);
   return j.dump(2) + "\n";
@@ -186,12 +190,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
     checkpointing.values["filter"] = extras.values["filter"];
     resume = runResumeFrom(extras.values, static_cast<std::size_t>(extras.steps_consumed), name);
   } else {
-    FilterSpec defaults;
-    defaults.linearization = request.linearization;
-    defaults.iterations = request.iterations;
-    defaults.seif = request.seif;
-    defaults.batch = request.batch;
-    const FilterSpec spec = parseFilterSpec(request.filter, defaults);
+    const FilterSpec spec = requestedSpec(request, request.filter);
     if (request.checkpoint_every > 0 && (request.smooth || spec.name == "batch")) {
       throw InvalidArgument("checkpoints: the batch MAP (and --smooth) keeps every measurement and has no checkpoint");
     }
