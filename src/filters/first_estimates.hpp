@@ -26,6 +26,11 @@ class FirstEstimates {
   /// p_{k|k-1}: the position the last fejIncrement() predicted (before any update), where
   /// the measurement Jacobians of this step take the robot.
   const Vec2& predictedPosition() const { return predicted_; }
+  /// Back to an earlier state: the prediction, and the first `landmarks` landmarks (a step undone).
+  void restore(const Vec2& predicted, int landmarks) {
+    predicted_ = predicted;
+    landmarks_.resize(static_cast<std::size_t>(landmarks));
+  }
 
   /// Records a new landmark's first estimate (its mean when initialised), in slot order.
   void addLandmark(const Vec2& first) { landmarks_.push_back(first); }

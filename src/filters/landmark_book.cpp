@@ -107,6 +107,22 @@ std::optional<Vec2> LandmarkBook::jacobianLandmark(int slot) const {
   return fej_->landmark(slot);
 }
 
+LandmarkBook::Mark LandmarkBook::mark() const {
+  return {size(), fej_ ? fej_->predictedPosition() : Vec2::Zero(), gate_.rejected()};
+}
+
+void LandmarkBook::undo(const Mark& mark) {
+  while (size() > mark.landmarks) {
+    slot_.erase(ids_.back());
+    ids_.pop_back();
+  }
+  if (fej_) fej_->restore(mark.predicted, mark.landmarks);
+  gate_.restore(mark.rejected);
+  planned_new_.clear();
+  planned_rejections_ = 0;
+  plan_.clear();
+}
+
 void LandmarkBook::removeSlot(int slot) {
   const int last = size() - 1;
   if (slot < 0 || slot > last) throw InvalidArgument(filter_ + ": no landmark slot " + std::to_string(slot));

@@ -100,6 +100,17 @@ class LandmarkBook {
   /// Removes slot `slot`; the last slot takes its place (the filter moves its rows likewise).
   void removeSlot(int slot);
 
+  /// The book's state before a step, to undo it: O(1) to take; undo(mark) removes the
+  /// landmarks committed since and restores the first-estimates prediction and the gate's
+  /// count (a step that failed, undone whole by its filter).
+  struct Mark {
+    int landmarks = 0;
+    Vec2 predicted = Vec2::Zero();
+    std::size_t rejected = 0;
+  };
+  Mark mark() const;
+  void undo(const Mark& mark);
+
  private:
   friend struct CheckpointAccess;  // checkpoints: src/filters/bookkeeping_state.cpp
   std::string filter_;

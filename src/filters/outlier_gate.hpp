@@ -31,6 +31,8 @@ class OutlierGate {
   bool wouldReject(const MeasurementModel& sensor, const Pose2& x, const Vec2& y, const Observation& z,
                    const Mat2& Z_inv) const;
   void count(std::size_t rejections) { rejected_ += rejections; }
+  /// Back to an earlier count (a step undone).
+  void restore(std::size_t rejected) { rejected_ = rejected; }
 
   std::size_t rejected() const { return rejected_; }
   double sigmas() const { return sigmas_; }

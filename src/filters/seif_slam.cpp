@@ -51,13 +51,32 @@ void SeifSlam::predict(const MotionIncrement& increment) {
 
 template <typename Step>
 void SeifSlam::guarded(const Step& step) {
-  if (!failed_.empty()) throw NumericError(failed_);
+  // All or nothing: the store journals what the step changes (O(what it touches)); the
+  // book, the counters and the random engine are saved whole. Any exception undoes it.
+  const LandmarkBook::Mark book = book_.mark();
+  const std::size_t relax_cursor = relax_cursor_, sparsifications = sparsifications_;
+  const double residual = last_sparsification_residual_;
+  const std::size_t relocalizations = eseif_relocalizations_, deferrals = eseif_deferrals_,
+                    fallbacks = eseif_fallbacks_;
+  std::optional<std::mt19937_64> rng;
+  if (options_.relax_order == SeifOptions::RelaxOrder::Random) rng = rng_;
+  store_.beginTransaction();
   try {
     step();
-  } catch (const NumericError& e) {
-    failed_ = std::string(e.what()) + " (the SEIF cannot undo a step: it refuses further steps; reload a checkpoint)";
-    throw NumericError(failed_);
+  } catch (...) {
+    store_.rollbackTransaction();
+    book_.undo(book);
+    relax_cursor_ = relax_cursor;
+    sparsifications_ = sparsifications;
+    last_sparsification_residual_ = residual;
+    eseif_relocalizations_ = relocalizations;
+    eseif_deferrals_ = deferrals;
+    eseif_fallbacks_ = fallbacks;
+    if (rng) rng_ = *rng;
+    invalidateFactor();
+    throw;
   }
+  store_.commitTransaction();
 }
 
 void SeifSlam::motionUpdate(const MotionIncrement& increment) {
@@ -123,7 +142,6 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
 }
 
 void SeifSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
-  if (!failed_.empty()) throw NumericError(failed_);
   book_.check(observations, sensor);  // bad input is refused before the state changes
   guarded([&] { applyUpdate(observations, sensor); });
 }

@@ -126,8 +126,8 @@ class SeifSlam final : public SlamFilter {
   void invalidateFactor();
   /// update() after its input checks.
   void applyUpdate(std::span<const Observation> observations, const MeasurementModel& sensor);
-  /// Runs a step; a NumericError from it marks the filter failed (failed_), and a failed
-  /// filter refuses every step with that message.
+  /// Runs a step all or nothing: any exception from it leaves the filter exactly as it was
+  /// (the store's transaction, the book's mark, the counters and the random engine).
   template <typename Step>
   void guarded(const Step& step);
   /// Linearization::Invariant, at the start of update(): re-anchors the robot, and each
@@ -160,7 +160,6 @@ class SeifSlam final : public SlamFilter {
   std::vector<MeasurementInformation> infos_;  // measurementUpdate()'s, for iterations
   std::vector<std::optional<Anchors>> anchors_;
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
-  std::string failed_;  // the NumericError a step ended with; empty while the filter is sound
 
   /// The sparse Cholesky factor of H and its selected inverse, built on first use after H
   /// changed: exact means and marginal covariances.

@@ -13,18 +13,118 @@ SeifStore::SeifStore(const Mat3& H_xx, const Vec3& mu_x)
     : H_xx_(H_xx), b_x_(H_xx * mu_x), mu_x_(mu_x), robot_anchor_(mu_x.head<2>()) {
   robot_links_.reserve(kMaxLocalLandmarks + 1);
   gathered_.reserve(kMaxLocalLandmarks + 1);
+  journal_.robot_links.reserve(kMaxLocalLandmarks + 1);
+  // What a step touches is bounded (the local block, the relaxed landmarks, their links):
+  // room for it up front keeps the steady state free of allocation.
+  journal_.entries.reserve(1024);
+  journal_.saved.reserve(512);
+  journal_.saved_links.reserve(8192);
+  journal_.means_of.reserve(512);
+}
+
+// ---------------------------------------------------------------- transactions --------
+
+void SeifStore::beginTransaction() {
+  Journal& j = journal_;
+  j.open = true;
+  ++j.id;
+  j.H_xx = H_xx_;
+  j.b_x = b_x_;
+  j.mu_x = mu_x_;
+  j.robot_anchor = robot_anchor_;
+  j.robot_links = robot_links_;  // at most kMaxLocalLandmarks: no allocation
+  j.nodes = nodes_.size();
+  j.ids = ids_.size();
+  j.landmark_links = landmark_links_;
+  j.max_landmark_links = max_landmark_links_;
+  j.step = step_;
+  j.entries.clear();
+  j.saved.clear();
+  j.saved_links.clear();
+  j.means_of.clear();
+  j.means_saved = false;
+}
+
+void SeifStore::commitTransaction() { journal_.open = false; }
+
+SeifStore::Node& SeifStore::write(int slot) {
+  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  Journal& j = journal_;
+  if (j.open && node.journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
+    j.entries.push_back({slot, true, j.saved.size()});
+    j.saved.push_back({node.H, node.b, node.mu, node.anchor, node.active, j.saved_links.size(), node.links.size()});
+    j.saved_links.insert(j.saved_links.end(), node.links.begin(), node.links.end());
+    node.journaled = j.id;
+  }
+  return node;
+}
+
+Vec2& SeifStore::writeMean(int slot) {
+  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  Journal& j = journal_;
+  if (j.open && node.journaled != j.id && node.mean_journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
+    j.entries.push_back({slot, false, j.means_of.size()});
+    j.means_of.push_back(node.mu);
+    node.mean_journaled = j.id;
+  }
+  return node.mu;
+}
+
+void SeifStore::rollbackTransaction() {
+  Journal& j = journal_;
+  if (!j.open) return;
+  if (j.means_saved) {
+    for (std::size_t s = 0; s < j.nodes; ++s) nodes_[s].mu = j.means[s];
+  }
+  // Latest first, so that each field ends at its earliest saved value.
+  for (std::size_t k = j.entries.size(); k-- > 0;) {
+    const Journal::Entry& e = j.entries[k];
+    Node& node = nodes_[static_cast<std::size_t>(e.slot)];
+    if (e.whole) {
+      const Journal::SavedNode& n = j.saved[e.index];
+      node.H = n.H;
+      node.b = n.b;
+      node.mu = n.mu;
+      node.anchor = n.anchor;
+      node.active = n.active;
+      const auto first = j.saved_links.begin() + static_cast<std::ptrdiff_t>(n.links_begin);
+      node.links.assign(first, first + static_cast<std::ptrdiff_t>(n.links_count));
+    } else {
+      node.mu = j.means_of[e.index];
+    }
+  }
+  nodes_.resize(j.nodes);
+  ids_.resize(j.ids);
+  H_xx_ = j.H_xx;
+  b_x_ = j.b_x;
+  mu_x_ = j.mu_x;
+  robot_anchor_ = j.robot_anchor;
+  robot_links_ = j.robot_links;
+  landmark_links_ = j.landmark_links;
+  max_landmark_links_ = j.max_landmark_links;
+  step_ = j.step;
+  j.open = false;
+}
+
+void SeifStore::requireNoTransaction(const char* what) const {
+  if (journal_.open) throw InvalidArgument(std::string("seif: ") + what + " inside a step (it is not journaled)");
 }
 
 // ---------------------------------------------------------------- links ---------------
 
 Mat2* SeifStore::link(int a, int c) {
-  for (Link& l : nodes_[static_cast<std::size_t>(a)].links) {
+  for (Link& l : write(a).links) {
     if (l.slot == c) return &l.H;
   }
   return nullptr;
 }
 
-const Mat2* SeifStore::findLink(int a, int c) const { return const_cast<SeifStore*>(this)->link(a, c); }
+const Mat2* SeifStore::findLink(int a, int c) const {
+  for (const Link& l : node(a).links) {
+    if (l.slot == c) return &l.H;
+  }
+  return nullptr;
+}
 
 void SeifStore::addToLink(int a, int c, const Mat2& H_ac) {
   if (Mat2* h = link(a, c)) {
@@ -32,8 +132,8 @@ void SeifStore::addToLink(int a, int c, const Mat2& H_ac) {
     *link(c, a) += H_ac.transpose();
     return;
   }
-  Node& na = nodes_[static_cast<std::size_t>(a)];
-  Node& nc = nodes_[static_cast<std::size_t>(c)];
+  Node& na = write(a);
+  Node& nc = write(c);
   na.links.push_back({c, H_ac});
   nc.links.push_back({a, H_ac.transpose()});
   ++landmark_links_;
@@ -51,7 +151,7 @@ int SeifStore::addLandmark(int id, const Vec2& mu) {
 }
 
 int SeifStore::activate(int slot) {
-  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  Node& node = write(slot);
   if (node.active < 0) {
     node.active = static_cast<int>(robot_links_.size());
     robot_links_.push_back({slot, Mat32::Zero(), step_});
@@ -76,7 +176,7 @@ void SeifStore::reanchorRobot() {
 }
 
 void SeifStore::reanchorLandmark(int slot, const Vec2& to) {
-  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  Node& node = write(slot);
   const Vec2 dc = quarterTurn(to - node.anchor);
   node.anchor = to;
   if (dc.isZero(0.0)) return;
@@ -101,14 +201,14 @@ void SeifStore::applyReanchor(const Vec3& q_x, double a) {
   for (const auto& [slot, q] : reanchor_q_) {
     RobotLink& l = robot_links_[static_cast<std::size_t>(activate(slot))];
     l.H.row(2) -= q.transpose();
-    nodes_[static_cast<std::size_t>(slot)].b -= mu_t * q;
+    write(slot).b -= mu_t * q;
   }
   blocks_touched_ += 1 + reanchor_q_.size();
 }
 
 void SeifStore::addObservation(int slot, const Eigen::Matrix<double, 5, 5>& H,
                                const Eigen::Matrix<double, 5, 1>& b) {
-  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  Node& node = write(slot);
   H_xx_ += H.topLeftCorner<3, 3>();
   b_x_ += b.head<3>();
   node.H += H.bottomRightCorner<2, 2>();
@@ -120,17 +220,18 @@ void SeifStore::addObservation(int slot, const Eigen::Matrix<double, 5, 5>& H,
 }
 
 void SeifStore::removeRobotLink(int slot) {
-  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  Node& node = write(slot);
   const std::size_t pos = static_cast<std::size_t>(node.active);
   node.active = -1;
   if (pos + 1 != robot_links_.size()) {
     robot_links_[pos] = robot_links_.back();
-    nodes_[static_cast<std::size_t>(robot_links_[pos].slot)].active = static_cast<int>(pos);
+    write(robot_links_[pos].slot).active = static_cast<int>(pos);
   }
   robot_links_.pop_back();
 }
 
 void SeifStore::marginalizeLandmark(int slot) {
+  requireNoTransaction("marginalizeLandmark()");
   const Node& l = nodes_[static_cast<std::size_t>(slot)];
   Eigen::LLT<Mat2> llt(l.H);
   if (llt.info() != Eigen::Success) {
@@ -174,6 +275,7 @@ void SeifStore::marginalizeLandmark(int slot) {
 }
 
 void SeifStore::mergeLandmarks(int keep, int drop) {
+  requireNoTransaction("mergeLandmarks()");
   Node& k = nodes_[static_cast<std::size_t>(keep)];
   const Node d = nodes_[static_cast<std::size_t>(drop)];  // a copy: links change below
   // H'_kk = H_kk + H_kd + H_dk + H_dd, b'_k = b_k + b_d.
@@ -201,6 +303,7 @@ void SeifStore::mergeLandmarks(int keep, int drop) {
 }
 
 void SeifStore::deleteLandmark(int slot) {
+  requireNoTransaction("deleteLandmark()");
   // Unlink it from its neighbours and the robot.
   for (const Link& l : nodes_[static_cast<std::size_t>(slot)].links) {
     std::vector<Link>& back = nodes_[static_cast<std::size_t>(l.slot)].links;
@@ -226,7 +329,7 @@ void SeifStore::deleteLandmark(int slot) {
 }
 
 void SeifStore::detachRobot(const Vec3& mu_x) {
-  for (const RobotLink& l : robot_links_) nodes_[static_cast<std::size_t>(l.slot)].active = -1;
+  for (const RobotLink& l : robot_links_) write(l.slot).active = -1;
   robot_links_.clear();
   H_xx_.setZero();
   b_x_.setZero();
@@ -235,6 +338,11 @@ void SeifStore::detachRobot(const Vec3& mu_x) {
 }
 
 void SeifStore::setMean(const Eigen::VectorXd& mu) {
+  if (journal_.open && !journal_.means_saved) {  // O(N), as the exact mean that calls it
+    journal_.means.resize(journal_.nodes);
+    for (std::size_t s = 0; s < journal_.nodes; ++s) journal_.means[s] = nodes_[s].mu;
+    journal_.means_saved = true;
+  }
   mu_x_ = mu.head<3>();
   for (int s = 0; s < size(); ++s) nodes_[static_cast<std::size_t>(s)].mu = mu.segment<2>(StateLayout::landmark(s));
 }
@@ -295,7 +403,7 @@ void SeifStore::scatter() {
   mu_x_ = local_mu_.head<3>();
   for (int i = 0; i < k; ++i) {
     const int a = gathered_[static_cast<std::size_t>(i)];
-    Node& node = nodes_[static_cast<std::size_t>(a)];
+    Node& node = write(a);
     const int r = 3 + 2 * i;
     node.H = local_H_.block<2, 2>(r, r);
     node.b = local_b_.segment<2>(r);
@@ -331,7 +439,7 @@ void SeifStore::relaxRobot() {
 }
 
 void SeifStore::relaxLandmark(int slot) {
-  Node& node = nodes_[static_cast<std::size_t>(slot)];
+  const Node& node = nodes_[static_cast<std::size_t>(slot)];
   Vec2 rhs = node.b;
   for (const Link& l : node.links) rhs.noalias() -= l.H * nodes_[static_cast<std::size_t>(l.slot)].mu;
   if (node.active >= 0) {
@@ -344,7 +452,7 @@ void SeifStore::relaxLandmark(int slot) {
         << " is not positive definite at step " << step_;
     throw NumericError(msg.str());
   }
-  node.mu = llt.solve(rhs);
+  writeMean(slot) = llt.solve(rhs);
   blocks_touched_ += 1 + node.links.size() + (node.active >= 0 ? 1 : 0);
 }
 
@@ -382,7 +490,7 @@ void SeifStore::solveLocalMean() {
   local_mu_ = llt.solve(local_rhs_);
   mu_x_ = local_mu_.head<3>();
   for (std::size_t i = 0; i < gathered_.size(); ++i) {
-    nodes_[static_cast<std::size_t>(gathered_[i])].mu = local_mu_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i));
+    writeMean(gathered_[i]) = local_mu_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i));
   }
 }
 

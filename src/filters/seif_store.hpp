@@ -36,6 +36,8 @@ class SeifStore {
     Vec2 anchor = Vec2::Zero();
     int active = -1;  // position in robotLinks(), or -1 when passive
     std::vector<Link> links;
+    long journaled = -1;       // the transaction that saved it whole last (beginTransaction())
+    long mean_journaled = -1;  // ... that saved its mean last
   };
 
   /// A map without landmarks: the robot's information H_xx at mean mu_x (b_x = H_xx mu_x).
@@ -110,6 +112,16 @@ class SeifStore {
   /// Sets the whole mean, in the state order.
   void setMean(const Eigen::VectorXd& mu);
 
+  // ---- transactions: a step all or nothing
+  /// Journals every change until commitTransaction() or rollbackTransaction(): the robot's
+  /// state and links once, each landmark node before its first change, the means once if
+  /// setMean() runs. O(what the step touches); no allocation once the journal has grown.
+  void beginTransaction();
+  void commitTransaction();
+  /// Restores the store exactly as it was at beginTransaction(). marginalizeLandmark(),
+  /// mergeLandmarks() and deleteLandmark() are not journaled (InvalidArgument inside one).
+  void rollbackTransaction();
+
   // ---- anchors of the invariant linearisation (src/filters/invariant.hpp)
   /// The robot position H is anchored at.
   const Vec2& robotAnchor() const { return robot_anchor_; }
@@ -165,6 +177,12 @@ class SeifStore {
 
  private:
   friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
+  /// nodes_[slot] for a change: saved first when a transaction is open.
+  Node& write(int slot);
+  /// nodes_[slot].mu for a change (the relaxations' only write): its mean saved first.
+  Vec2& writeMean(int slot);
+  void requireNoTransaction(const char* what) const;
+  /// H_{a,c} for a change (write(a)), or nullptr when they are not linked.
   Mat2* link(int a, int c);
   void gatherListed();  // gather() of gathered_
   /// Links landmark `slot` to the robot (activates it) with a zero block; its position.
@@ -192,6 +210,38 @@ class SeifStore {
   LocalVector local_mu_;
   LocalVector local_rhs_;
   std::vector<std::pair<int, Vec2>> reanchor_q_;  // applyReanchor()'s landmark entries
+
+  struct Journal {
+    bool open = false;
+    long id = 0;  // of the open (or last) transaction
+    Mat3 H_xx;
+    Vec3 b_x, mu_x;
+    Vec2 robot_anchor;
+    std::vector<RobotLink> robot_links;
+    std::size_t nodes = 0, ids = 0, landmark_links = 0, max_landmark_links = 0;
+    long step = 0;
+    // What was saved, in order: a whole node (saved[index]) or a mean (means_of[index]).
+    struct Entry {
+      int slot;
+      bool whole;
+      std::size_t index;
+    };
+    // A node without its link list, whose links are saved_links[links_begin, + links_count):
+    // within a step a node's links only change in value or grow at the end.
+    struct SavedNode {
+      Mat2 H;
+      Vec2 b, mu, anchor;
+      int active;
+      std::size_t links_begin, links_count;
+    };
+    std::vector<Entry> entries;
+    std::vector<SavedNode> saved;
+    std::vector<Link> saved_links;
+    std::vector<Vec2> means_of;
+    bool means_saved = false;
+    std::vector<Vec2> means;   // every landmark's mean, when setMean() ran
+  };
+  Journal journal_;
 };
 
 }  // namespace seif

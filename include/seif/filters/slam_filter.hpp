@@ -113,10 +113,9 @@ class SlamFilter {
   virtual void predict(const MotionIncrement& increment) = 0;
 
   /// Measurement update with all observations made at one instant (one linearisation
-  /// point), each with `sensor.noise(z)`. Bad input (InvalidArgument, UnknownLandmark, ...)
-  /// leaves every filter unchanged. A NumericError leaves the EKF and the EIF as they were
-  /// before the call; the SEIF, which updates in place in constant time and cannot undo,
-  /// then refuses every further predict() and update() with that error (reload a checkpoint).
+  /// point), each with `sensor.noise(z)`. All or nothing: bad input (InvalidArgument,
+  /// UnknownLandmark, ...) and a NumericError leave every filter as it was before the call
+  /// (the SEIF, which updates in place, journals what the step changes and undoes it).
   virtual void update(std::span<const Observation> observations, const MeasurementModel& sensor) = 0;
 
   /// predict() with the config's motion model linearised at linearizationPose(). A
