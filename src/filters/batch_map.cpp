@@ -18,24 +18,6 @@ namespace seif {
 
 namespace {
 
-Mat3 poseRotation(double theta) {
-  const double c = std::cos(theta), s = std::sin(theta);
-  Mat3 R;
-  R << c, -s, 0, s, c, 0, 0, 0, 1;
-  return R;
-}
-
-/// U^+ (the pseudo-inverse of a covariance; a singular one's null space is a constraint).
-Mat3 pseudoInverse(const Mat3& U) {
-  const Eigen::SelfAdjointEigenSolver<Mat3> eig(0.5 * (U + U.transpose()));
-  const double tol = 1e-12 * std::max(eig.eigenvalues().maxCoeff(), 1e-300);
-  Mat3 out = Mat3::Zero();
-  for (int i = 0; i < 3; ++i) {
-    if (eig.eigenvalues()(i) > tol) out += eig.eigenvectors().col(i) * eig.eigenvectors().col(i).transpose() / eig.eigenvalues()(i);
-  }
-  return out;
-}
-
 FilterConfig innerConfig(const FilterConfig& config) {
   FilterConfig c = config;  // the batch gates; its filter sees only what passed
   c.outlier_gate = std::numeric_limits<double>::infinity();
@@ -114,6 +96,7 @@ int BatchMap::closeSegment() {
 }
 
 void BatchMap::addBodyStep(const Vec3& body, const Mat3& U_body) {
+  guess_ = wrapHeading(Pose2(guess_ + poseRotation(guess_(2)) * body));
   pre_.add(body, U_body);
   steps_.push_back({-1, static_cast<int>(problem_.motions.size()), pre_.delta(), pre_.covariance()});
 }
@@ -124,7 +107,6 @@ void BatchMap::predict(const MotionIncrement& increment) {
   const Vec3 body = Rt * increment.delta;
   const Mat3 U_body = Rt * increment.U * Rt.transpose();
   if (inner_) inner_->predict(increment);
-  guess_ = wrapHeading(Pose2(guess_ + poseRotation(guess_(2)) * body));
   addBodyStep(body, U_body);
   last_pose_links_ = 0;
 }
@@ -137,9 +119,7 @@ void BatchMap::predict(const MotionInput& u) {
     const MotionIncrement m = motion.linearize(at, u);
     const Mat3 Rt = poseRotation(at(2)).transpose();
     if (inner_) inner_->predict(u);
-    const Vec3 body = Rt * m.delta;
-    guess_ = wrapHeading(Pose2(guess_ + poseRotation(guess_(2)) * body));
-    addBodyStep(body, Rt * m.U * Rt.transpose());
+    addBodyStep(Rt * m.delta, Rt * m.U * Rt.transpose());
   } else {  // its own pose and a factor relinearised at every iteration
     const int from = closeSegment();
     if (inner_) inner_->predict(u);
@@ -265,10 +245,8 @@ Pose2 BatchMap::bridge(const StepPose& s, const Pose2& xa, const Pose2& xb) cons
   Vec3 rel_b = Ra.transpose() * (xb - xa);
   Vec3 e_b = rel_b - m.body;
   e_b(2) = wrapAngle(xb(2) - xa(2) - m.body(2));
-  Mat3 T = Mat3::Identity();
-  T(0, 2) = -(m.body(1) - s.p(1));
-  T(1, 2) = m.body(0) - s.p(0);
-  const Vec3 e_k = s.P * T.transpose() * pseudoInverse(m.U_body) * e_b;
+  const Mat3 T = preintegrationTransition(m.body, s.p);
+  const Vec3 e_k = s.P * T.transpose() * noiseWeight(m.U_body) * e_b;
   return wrapHeading(Pose2(xa + Ra * (s.p + e_k)));
 }
 
@@ -324,11 +302,8 @@ std::vector<Mat3> BatchMap::trajectoryCovariances() const {
       d(2) = wrapAngle(d(2));
       J.col(i) = d / (2.0 * h);
     }
-    Mat3 T = Mat3::Identity();
-    T(0, 2) = -(m.body(1) - s.p(1));
-    T(1, 2) = m.body(0) - s.p(0);
-    const Mat3 PT = s.P * T.transpose();
-    const Mat3 conditional = s.P - PT * pseudoInverse(m.U_body) * PT.transpose();
+    const Mat3 PT = s.P * preintegrationTransition(m.body, s.p).transpose();
+    const Mat3 conditional = s.P - PT * noiseWeight(m.U_body) * PT.transpose();
     const Mat3 Ra = poseRotation(xa(2));
     Mat3 S = J * joint * J.transpose() + Ra * conditional * Ra.transpose();
     out.push_back(0.5 * (S + S.transpose()));

@@ -121,6 +121,7 @@ class BatchMap final : public SlamFilter {
   Vec2 landmarkGuess(int slot) const;
   /// Makes the current pose a node (closing the preintegrated motion to it); its index.
   int closeSegment();
+  /// One step's motion in the robot's frame: into the open motion and the odometry guess.
   void addBodyStep(const Vec3& body, const Mat3& U_body);
   /// The node poses read from one pose per step.
   std::vector<Pose2> nodePoses(const std::vector<Pose2>& poses) const;

@@ -2,6 +2,7 @@
 #include "filters/batch_problem.hpp"
 
 #include "core/sparse_marginals.hpp"
+#include "filters/preintegration.hpp"
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
 
@@ -54,14 +55,7 @@ void addBlock(Triplets& t, Eigen::Index row, Eigen::Index col, const M& m) {
   }
 }
 
-/// The planar rotation by theta acting on a pose increment (x, y rotate, heading stays), and
-/// its derivative in theta.
-Mat3 poseRotation(double theta) {
-  const double c = std::cos(theta), s = std::sin(theta);
-  Mat3 R;
-  R << c, -s, 0, s, c, 0, 0, 0, 1;
-  return R;
-}
+/// The derivative in theta of poseRotation(theta) (preintegration.hpp).
 Mat3 poseRotationDerivative(double theta) {
   const double c = std::cos(theta), s = std::sin(theta);
   Mat3 D;
@@ -376,6 +370,17 @@ Eigen::MatrixXd BatchSolution::marginal(const std::vector<Eigen::Index>& rows) c
     out -= Xr * cov.S.solve(Xr.transpose());
   }
   return 0.5 * (out + out.transpose());
+}
+
+Mat3 noiseWeight(const Mat3& U) {
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(0.5 * (U + U.transpose()));
+  const double tol = kRankTolerance * std::max(eig.eigenvalues().maxCoeff(), 1e-300);
+  Mat3 out = Mat3::Zero();
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 v = eig.eigenvectors().col(i);
+    if (eig.eigenvalues()(i) > tol) out += v * v.transpose() / eig.eigenvalues()(i);
+  }
+  return out;
 }
 
 double batchCost(const BatchProblem& problem, const std::vector<Pose2>& nodes, const std::vector<Vec2>& landmarks,

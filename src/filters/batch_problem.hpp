@@ -107,6 +107,10 @@ class BatchSolution {
   std::unique_ptr<Covariance> covariance_;
 };
 
+/// U^+ with the solver's rank tolerance: the weight of a motion residual whose covariance is
+/// U (its null space is held by constraints, not weighted).
+Mat3 noiseWeight(const Mat3& U);
+
 /// F (chi-square) at (nodes, landmarks), and in `violation` max |W^T r|. Throws ModelError
 /// from the sensor for a degenerate geometry.
 double batchCost(const BatchProblem& problem, const std::vector<Pose2>& nodes, const std::vector<Vec2>& landmarks,

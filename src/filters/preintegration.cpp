@@ -11,9 +11,7 @@ void Preintegration::add(const Vec3& b, const Mat3& U_b) {
     steps_ = 1;
     return;
   }
-  const double c = std::cos(delta_(2)), s = std::sin(delta_(2));
-  Mat3 R;
-  R << c, -s, 0, s, c, 0, 0, 0, 1;
+  const Mat3 R = poseRotation(delta_(2));
   const Vec3 step = R * b;
   Mat3 F = Mat3::Identity();
   F(0, 2) = -step(1);
@@ -24,10 +22,17 @@ void Preintegration::add(const Vec3& b, const Mat3& U_b) {
   ++steps_;
 }
 
-Mat3 Preintegration::transitionFrom(const Vec3& p_k) const {
+Mat3 poseRotation(double theta) {
+  const double c = std::cos(theta), s = std::sin(theta);
+  Mat3 R;
+  R << c, -s, 0, s, c, 0, 0, 0, 1;
+  return R;
+}
+
+Mat3 preintegrationTransition(const Vec3& B, const Vec3& p_k) {
   Mat3 T = Mat3::Identity();
-  T(0, 2) = -(delta_(1) - p_k(1));
-  T(1, 2) = delta_(0) - p_k(0);
+  T(0, 2) = -(B(1) - p_k(1));
+  T(1, 2) = B(0) - p_k(0);
   return T;
 }
 

@@ -17,6 +17,13 @@
 
 namespace seif {
 
+/// The planar rotation by theta acting on a pose increment (x, y rotate, the heading stays).
+Mat3 poseRotation(double theta);
+
+/// dp_B/dp_k for a composed motion B and the relative pose p_k after one of its steps: a pose
+/// error at that step carried rigidly to the end, [[1, 0, -(y_B - y_k)], [0, 1, x_B - x_k], [0, 0, 1]].
+Mat3 preintegrationTransition(const Vec3& B, const Vec3& p_k);
+
 class Preintegration {
  public:
   /// One step's motion b and covariance U_b, both in the robot's frame before the step.
@@ -26,10 +33,6 @@ class Preintegration {
   const Vec3& delta() const { return delta_; }       ///< B: the relative pose (heading unwrapped)
   const Mat3& covariance() const { return U_; }      ///< U_B
   int steps() const { return steps_; }
-
-  /// dp_b/dp_k for the pose after step k of this segment, p_k its relative pose: a pose error
-  /// at step k carried rigidly to the end, [[1, 0, -(y_b - y_k)], [0, 1, x_b - x_k], [0, 0, 1]].
-  Mat3 transitionFrom(const Vec3& p_k) const;
 
  private:
   Vec3 delta_ = Vec3::Zero();
