@@ -52,6 +52,10 @@ struct Observation {
   int landmark = kUnknownLandmark;  ///< landmark id when the association is known
   Vec2 z = Vec2::Zero();
   std::optional<Mat2> noise;        ///< its own 2x2 covariance; the sensor's default when empty
+  /// The id the data names for what was seen, for scoring an association only (simulator
+  /// truth, a dataset's own ids when they are hidden from the filter); kUnknownLandmark
+  /// when the data names none (clutter, an unmatched raw detection). No filter reads it.
+  int truth = kUnknownLandmark;
 };
 
 /// Standard deviations of the control and measurement noise.
