@@ -130,7 +130,7 @@ TEST_P(CheckpointResume, ResumedRunIsBitIdentical) {
 INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
                          ::testing::Values("ekf", "eif", "seif", "seif:sparsify=eseif,beta=4",
                                            "seif:relax-order=random", "ekf:linearization=fej",
-                                           "eif:linearization=fej", "seif:linearization=fej",
+                                           "eif:linearization=fej", "seif:linearization=fej", "seif:linearization=oc,iterations=2",
                                            "seif:deactivate=oldest,active=4", "seif:mean=exact",
                                            "seif:recovery=after-update,covariance=local",
                                            "ekf:linearization=invariant,iterations=2",

@@ -10,6 +10,7 @@
 #include <seif/filters/factory.hpp>
 #include "filters/first_estimates.hpp"
 #include "filters/seif_slam.hpp"
+#include <seif/models/range_bearing.hpp>
 #include <seif/sim/world.hpp>
 
 #include <gtest/gtest.h>
@@ -17,6 +18,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -56,9 +58,10 @@ struct NullspaceResidual {
   double robot_point = 0.0;  // |x_{k|k-1} - p_{k|k-1}|: the filter's pose at update time
 };
 
-NullspaceResidual nullspaceResidual(bool standard) {
+NullspaceResidual nullspaceResidual(Linearization policy) {
+  const bool standard = policy == Linearization::Standard;
   const test::Scenario s = test::makeScenario(5, 30, 200);
-  EkfSlam ekf(s.start, configFor(s, Linearization::FirstEstimates));
+  EkfSlam ekf(s.start, configFor(s, policy));
   FirstEstimates fe(s.start);
   NullspaceResidual r;
   for (const Step& step : s.steps) {
@@ -85,7 +88,12 @@ NullspaceResidual nullspaceResidual(bool standard) {
       const Vec2 m_first = fe.landmark(slot);
       Mat23 J_x;
       Mat2 J_y;
-      sensor.predict(x, standard ? ekf.landmark(z.landmark) : m_first, &J_x, &J_y);
+      const bool fej = policy == Linearization::FirstEstimates;
+      sensor.predict(x, fej ? m_first : ekf.landmark(z.landmark), &J_x, &J_y);
+      // the OC-EKF: the newest estimates' Jacobian, projected (what PlannedObservation::constrain does)
+      if (policy == Linearization::ObservabilityConstrained) {
+        ObservabilityConstraint{fe.predictedPosition(), m_first}.apply(J_x, J_y);
+      }
       Eigen::Matrix<double, 2, 5> J;
       J << J_x, J_y;
       Eigen::Matrix<double, 5, 3> N;
@@ -105,15 +113,69 @@ NullspaceResidual nullspaceResidual(bool standard) {
 TEST(FirstEstimates, JacobiansAnnihilateTheUnobservableDirections) {
   // Huang et al. eq. (41-44): with FEJ, Phi_k N_k = N_{k+1} and H_k N_k = 0 at every step,
   // so the observability matrix keeps the three-dimensional nullspace of the real system.
-  const NullspaceResidual fej = nullspaceResidual(false);
+  const NullspaceResidual fej = nullspaceResidual(Linearization::FirstEstimates);
   EXPECT_EQ(fej.robot_point, 0.0);  // the filter's pose at update time is p_{k|k-1}
   EXPECT_LT(fej.transition, 1e-12);
   EXPECT_LT(fej.measurement, 1e-12);
   // The textbook Jacobians (at the newest estimates) do not: this is the spurious heading
   // information of Huang et al. §4.
-  const NullspaceResidual standard = nullspaceResidual(true);
+  const NullspaceResidual standard = nullspaceResidual(Linearization::Standard);
   EXPECT_GT(standard.transition, 1e-3);
   EXPECT_GT(standard.measurement, 1e-3);
+}
+
+TEST(ObservabilityConstrained, JacobiansAnnihilateTheUnobservableDirections) {
+  // The OC-EKF (Huang et al. 2010): the same transition as FEJ, and measurement Jacobians at
+  // the newest estimates projected so that H N_k = 0 with N_k at the first estimates.
+  const NullspaceResidual oc = nullspaceResidual(Linearization::ObservabilityConstrained);
+  EXPECT_EQ(oc.robot_point, 0.0);
+  EXPECT_LT(oc.transition, 1e-12);
+  EXPECT_LT(oc.measurement, 1e-12);
+}
+
+TEST(ObservabilityConstrained, TheProjectionIsTheClosestJacobianThatAnnihilatesN) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> n01;
+  for (int trial = 0; trial < 100; ++trial) {
+    Mat23 J_x;
+    Mat2 J_y;
+    for (int i = 0; i < 2; ++i) {
+      for (int j = 0; j < 3; ++j) J_x(i, j) = n01(rng);
+      for (int j = 0; j < 2; ++j) J_y(i, j) = n01(rng);
+    }
+    const ObservabilityConstraint c{Vec2(n01(rng), n01(rng)), Vec2(n01(rng), n01(rng))};
+    Mat23 Px = J_x;
+    Mat2 Py = J_y;
+    c.apply(Px, Py);
+    Eigen::Matrix<double, 5, 3> N = Eigen::Matrix<double, 5, 3>::Zero();
+    N.topRows<3>() = robotNullspace(c.robot);
+    N.bottomLeftCorner<2, 2>().setIdentity();
+    N.block<2, 1>(3, 2) = rot90() * c.landmark;
+    Eigen::Matrix<double, 2, 5> J, P;
+    J << J_x, J_y;
+    P << Px, Py;
+    EXPECT_LT((P * N).cwiseAbs().maxCoeff(), 1e-12);
+    // the change J - P lies in N's column space (row-wise), so no closer Jacobian exists:
+    // any other Q with Q N = 0 differs from P by rows orthogonal to it.
+    const Eigen::Matrix<double, 2, 5> D = J - P;
+    const Eigen::Matrix<double, 2, 3> coeff = (N.transpose() * N).ldlt().solve(N.transpose() * D.transpose()).transpose();
+    EXPECT_LT((D - coeff * N.transpose()).cwiseAbs().maxCoeff(), 1e-12);
+    // applying it twice changes nothing
+    c.apply(Px, Py);
+    Eigen::Matrix<double, 2, 5> P2;
+    P2 << Px, Py;
+    EXPECT_LT((P2 - P).cwiseAbs().maxCoeff(), 1e-14);
+  }
+  // A range-bearing Jacobian at the constraint's own points already annihilates N: unchanged.
+  const RangeBearingModel rb(0.1, 0.1);
+  Mat23 J_x;
+  Mat2 J_y;
+  rb.predict(Pose2(0.3, -0.2, 0.7), Vec2(1.1, 0.4), &J_x, &J_y);
+  Mat23 Px = J_x;
+  Mat2 Py = J_y;
+  ObservabilityConstraint{Vec2(0.3, -0.2), Vec2(1.1, 0.4)}.apply(Px, Py);
+  EXPECT_LT((Px - J_x).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((Py - J_y).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 TEST(FirstEstimates, IncrementChangesOnlyTheHeadingColumn) {

@@ -163,7 +163,7 @@ TEST(Invariant, TheAnchoredHeadingColumnIsTheModelsAtTheAnchors) {
 TEST(Invariant, EkfEqualsEifWithEachLinearisationAndIterations) {
   const test::Scenario s = test::makeScenario(21, 12, 60);
   for (const char* options : {"linearization=invariant", "linearization=invariant,iterations=3", "iterations=2",
-                              "linearization=fej,iterations=2"}) {
+                              "linearization=fej,iterations=2", "linearization=oc", "linearization=oc,iterations=2"}) {
     auto ekf = makeFilter(std::string("ekf:") + options, s.start, test::configFor(s));
     auto eif = makeFilter(std::string("eif:") + options, s.start, test::configFor(s));
     for (const Step& step : s.steps) {

@@ -117,11 +117,13 @@ void bindBatchOptions(py::module_& m) {
 void bindConfig(py::module_& m) {
   bindNamedEnum<Linearization>(m, "Linearization",
                                "Where Jacobians are evaluated: Standard (newest estimates), FirstEstimates "
-                               "(FEJ) or Invariant (the right-invariant EKF). Strings 'standard' | 'fej' | 'invariant'.",
+                               "(FEJ), Invariant (the right-invariant EKF) or ObservabilityConstrained (the OC-EKF). Strings "
+                               "'standard' | 'fej' | 'invariant' | 'oc'.",
                                &parseLinearization, &linearizationName)
       .value("Standard", Linearization::Standard)
       .value("FirstEstimates", Linearization::FirstEstimates)
-      .value("Invariant", Linearization::Invariant);
+      .value("Invariant", Linearization::Invariant)
+      .value("ObservabilityConstrained", Linearization::ObservabilityConstrained);
 
   py::class_<FilterConfig>(m, "FilterConfig",
                            "What every filter is built with (filters/slam_filter.hpp): the motion and sensor models "

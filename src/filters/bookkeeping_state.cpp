@@ -41,8 +41,8 @@ void CheckpointAccess::readFirstEstimates(ArchiveReader& in, std::optional<First
   in.section("first-estimates");
   const bool present = in.u64Max("first-estimates flag", 1) == 1;
   if (present != expected) {
-    in.fail(present ? "first estimates stored for a filter without linearization=fej"
-                    : "no first estimates stored for a filter with linearization=fej");
+    in.fail(present ? "first estimates stored for a filter without linearization=fej or oc"
+                    : "no first estimates stored for a filter with linearization=fej or oc");
   }
   if (!present) {
     fej.reset();
@@ -81,7 +81,7 @@ void CheckpointAccess::writeBook(ArchiveWriter& out, const LandmarkBook& book) {
 void CheckpointAccess::readBook(ArchiveReader& in, LandmarkBook& book) {
   readGate(in, book.gate_);
   readIndex(in, book.ids_, book.slot_);
-  readFirstEstimates(in, book.fej_, book.linearization_ == Linearization::FirstEstimates, book.size());
+  readFirstEstimates(in, book.fej_, LandmarkBook::keepsFirstEstimates(book.linearization_), book.size());
 }
 
 }  // namespace seif

@@ -57,7 +57,7 @@ FilterConfig readConfig(ArchiveReader& in) {
   }
   in.fixed("initial pose sigma", c.initial_pose_sigma);
   c.outlier_gate = in.f64("outlier gate");
-  c.linearization = static_cast<Linearization>(in.u64Max("linearization", in.version() == 1 ? 1 : 2));
+  c.linearization = static_cast<Linearization>(in.u64Max("linearization", in.version() == 1 ? 1 : 3));
   if (in.version() >= 2) c.iterations = static_cast<int>(in.u64Max("iterations", 20));
   if (c.iterations < 1) in.fail("iterations must be >= 1");
   return c;

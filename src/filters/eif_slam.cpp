@@ -182,7 +182,8 @@ void EifSlam::applyPlan(std::span<const PlannedObservation> plan, const Measurem
   for (const PlannedObservation& p : plan) {
     const Eigen::Index l = StateLayout::landmark(p.slot);
     const MeasurementInformation info = measurementInformation(sensor, x, mu_.segment<2>(l), *p.z,
-                                                               sensor.noise(*p.z).inverse(), p.jacobian_landmark);
+                                                               sensor.noise(*p.z).inverse(), p.jacobian_landmark,
+                                                               std::nullopt, p.constraint);
     H_.topLeftCorner<3, 3>() += info.H.topLeftCorner<3, 3>();
     H_.block<3, 2>(0, l) += info.H.topRightCorner<3, 2>();
     H_.block<2, 3>(l, 0) += info.H.bottomLeftCorner<2, 3>();
@@ -215,6 +216,7 @@ void EifSlam::applyIterated(std::span<const PlannedObservation> plan, const Meas
       Mat2 Jy;
       const Vec2 zhat = sensor.predict(at.head<3>(), at.segment<2>(l), &Jx, &Jy);
       if (p.jacobian_landmark) sensor.predict(at.head<3>(), *p.jacobian_landmark, &Jx, &Jy);
+      p.constrain(Jx, Jy);
       if (invariant && !fixed) Jx.col(2) = invariant::anchoredHeadingColumn(Jy, mu0.head<2>(), mu0.segment<2>(l));
       Vec2 nu = sensor.residual(p.z->z, zhat);
       if (!fixed) nu += Jx * delta.head<3>() + Jy * delta.segment<2>(l);

@@ -161,6 +161,7 @@ void EkfSlam::applyPlan(std::span<const PlannedObservation> plan, const Measurem
       li[k] = StateLayout::landmark(p.slot);
       const Vec2 zhat = sensor.predict(x, s.segment<2>(li[k]), &Jx[k], &Jy[k]);
       if (p.jacobian_landmark) sensor.predict(x, *p.jacobian_landmark, &Jx[k], &Jy[k]);
+      p.constrain(Jx[k], Jy[k]);
       if (invariant && it > 0) {  // the lever arm at the anchors (the prior mean)
         Jx[k].col(2) = invariant::anchoredHeadingColumn(Jy[k], mu0.head<2>(), mu0.segment<2>(li[k]));
       }

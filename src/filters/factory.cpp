@@ -76,8 +76,9 @@ const std::array<FilterOption, 16> kOptions = {{
      "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=30 "
      "(honest covariances in constant time; README)",
      &applyProfile, [](const FilterSpec&) { return std::string(); }},
-    {"linearization", kAll, kChoice, "standard|fej|invariant", 0, 0,
-     "the Jacobians: at the newest estimates, at the first ones (FEJ), or the right-invariant EKF's",
+    {"linearization", kAll, kChoice, "standard|fej|invariant|oc", 0, 0,
+     "the Jacobians: at the newest estimates, at the first ones (FEJ), the right-invariant EKF's, "
+     "or the observability-constrained EKF's (oc)",
      [](FilterSpec& s, std::string_view v) { s.linearization = parseLinearization(v); },
      [](const FilterSpec& s) { return std::string(linearizationName(s.linearization)); }},
     {"iterations", kAll, kInteger, "", 1, 20,

@@ -11,6 +11,18 @@
 
 namespace seif {
 
+/// Where the observability-constrained EKF (Linearization::ObservabilityConstrained) takes
+/// the unobservable directions of one observation's Jacobian: N = [I J p; 0 1; I J l] over
+/// (x, y, th, lx, ly), p the predicted robot position p_{k|k-1}, l the landmark's first
+/// estimate, J the quarter turn (Huang, Mourikis, Roumeliotis, IJRR 2010).
+struct ObservabilityConstraint {
+  Vec2 robot = Vec2::Zero();
+  Vec2 landmark = Vec2::Zero();
+  /// J* = J - J N (N^T N)^-1 N^T on [J_x | J_y]: the closest Jacobian (Frobenius norm) with
+  /// J* N = 0.
+  void apply(Mat23& J_x, Mat2& J_y) const;
+};
+
 class FirstEstimates {
  public:
   /// p_{0|-1} = the start position (there is no earlier prediction).

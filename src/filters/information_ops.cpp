@@ -134,12 +134,14 @@ void marginalizeRobot(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd>
 MeasurementInformation measurementInformation(const MeasurementModel& sensor, const Pose2& x,
                                               const Vec2& y, const Observation& z, const Mat2& Z_inv,
                                               const std::optional<Vec2>& jacobian_landmark,
-                                              const std::optional<Anchors>& anchors) {
+                                              const std::optional<Anchors>& anchors,
+                                              const std::optional<ObservabilityConstraint>& constraint) {
   Mat23 J_x;
   Mat2 J_y;
   const Vec2 zhat = sensor.predict(x, y, &J_x, &J_y);
   if (jacobian_landmark) sensor.predict(x, *jacobian_landmark, &J_x, &J_y);
   if (anchors) J_x.col(2) = invariant::anchoredHeadingColumn(J_y, anchors->robot, anchors->landmark);
+  if (constraint) constraint->apply(J_x, J_y);
   Eigen::Matrix<double, 2, 5> J;
   J << J_x, J_y;
   Eigen::Matrix<double, 5, 1> mu_local;

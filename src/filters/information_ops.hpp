@@ -2,6 +2,7 @@
 // The information-form steps shared by the EIF (on its whole matrix) and the SEIF (on the
 // small dense block it gathers around the robot). One implementation of each equation.
 #include <seif/core/types.hpp>
+#include "filters/first_estimates.hpp"
 #include <seif/models/measurement_model.hpp>
 
 #include <Eigen/Core>
@@ -76,7 +77,8 @@ struct Anchors {
 MeasurementInformation measurementInformation(const MeasurementModel& sensor, const Pose2& x,
                                               const Vec2& y, const Observation& z, const Mat2& Z_inv,
                                               const std::optional<Vec2>& jacobian_landmark = std::nullopt,
-                                              const std::optional<Anchors>& anchors = std::nullopt);
+                                              const std::optional<Anchors>& anchors = std::nullopt,
+                                              const std::optional<ObservabilityConstraint>& constraint = std::nullopt);
 
 /// The Local marginal (SlamFilter::marginal, MarginalMode::Local): the joint covariance of
 /// `vars` (-1 the robot, else landmark slots; in that order in the result) read off the

@@ -9,7 +9,9 @@ namespace seif {
 
 LandmarkBook::LandmarkBook(std::string filter, const Pose2& start, const FilterConfig& config)
     : filter_(std::move(filter)), linearization_(config.linearization), gate_(config.outlier_gate) {
-  if (linearization_ == Linearization::FirstEstimates) fej_.emplace(start);
+  // The OC-EKF keeps the same records as first-estimates Jacobians: the pose predictions
+  // (its motion Jacobian) and each landmark's first estimate (its null space).
+  if (keepsFirstEstimates(linearization_)) fej_.emplace(start);
   // A step's plan allocates only when it holds more observations than any before (the
   // SEIF's steady state allocates nothing, tests/test_seif_allocation.cpp).
   plan_.reserve(64);
@@ -62,16 +64,16 @@ std::span<const PlannedObservation> LandmarkBook::plan(std::span<const Observati
         }
         p.slot = size() + static_cast<int>(planned_new_.size());
         planned_new_.emplace_back(o.landmark, p.initial);
-        if (fej_) p.jacobian_landmark = p.initial;
+        setJacobianPolicy(p, p.initial);
         plan_.push_back(p);
         continue;
       }
       p.slot = size() + static_cast<int>(it - planned_new_.begin());
       y = it->second;
-      if (fej_) p.jacobian_landmark = it->second;
+      setJacobianPolicy(p, it->second);
     } else {
       y = mean(p.slot);
-      p.jacobian_landmark = jacobianLandmark(p.slot);
+      if (fej_) setJacobianPolicy(p, fej_->landmark(p.slot));
     }
     if (gate_.wouldReject(sensor, x, y, o, sensor.noise(o).inverse())) {
       ++planned_rejections_;
@@ -80,6 +82,13 @@ std::span<const PlannedObservation> LandmarkBook::plan(std::span<const Observati
     plan_.push_back(p);
   }
   return plan_;
+}
+
+void LandmarkBook::setJacobianPolicy(PlannedObservation& p, const Vec2& first) const {
+  if (linearization_ == Linearization::FirstEstimates) p.jacobian_landmark = first;
+  if (linearization_ == Linearization::ObservabilityConstrained) {
+    p.constraint = ObservabilityConstraint{fej_->predictedPosition(), first};
+  }
 }
 
 void LandmarkBook::commit() {
@@ -103,7 +112,7 @@ MotionIncrement LandmarkBook::motionIncrement(const MotionIncrement& m, const Ve
 }
 
 std::optional<Vec2> LandmarkBook::jacobianLandmark(int slot) const {
-  if (!fej_) return std::nullopt;
+  if (linearization_ != Linearization::FirstEstimates) return std::nullopt;
   return fej_->landmark(slot);
 }
 

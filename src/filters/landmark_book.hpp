@@ -42,6 +42,13 @@ struct PlannedObservation {
   /// Where this observation's Jacobians take the landmark: nullopt at its current mean
   /// (standard), else its first estimate (first-estimates Jacobians).
   std::optional<Vec2> jacobian_landmark;
+  /// Linearization::ObservabilityConstrained: the directions its Jacobians must annihilate.
+  std::optional<ObservabilityConstraint> constraint;
+  /// The policy's last word on this observation's Jacobians (every filter calls it after
+  /// evaluating them): the observability constraint when there is one, else nothing.
+  void constrain(Mat23& J_x, Mat2& J_y) const {
+    if (constraint) constraint->apply(J_x, J_y);
+  }
 };
 
 class LandmarkBook {
@@ -89,6 +96,10 @@ class LandmarkBook {
 
   // ---- linearisation policy
   Linearization linearization() const { return linearization_; }
+  /// Whether the policy keeps first estimates (fej and oc): checkpoints store them then.
+  static bool keepsFirstEstimates(Linearization l) {
+    return l == Linearization::FirstEstimates || l == Linearization::ObservabilityConstrained;
+  }
   /// The increment the filter applies: with first estimates, its heading column from the
   /// pose predictions (FirstEstimates::fejIncrement); else `m` itself. `position` is the
   /// robot position the increment was linearised at.
@@ -113,6 +124,8 @@ class LandmarkBook {
 
  private:
   friend struct CheckpointAccess;  // checkpoints: src/filters/bookkeeping_state.cpp
+  /// Where p's Jacobians go under the policy, `first` the landmark's first estimate.
+  void setJacobianPolicy(PlannedObservation& p, const Vec2& first) const;
   std::string filter_;
   Linearization linearization_;
   OutlierGate gate_;

@@ -113,7 +113,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
     if (invariant) anchors = Anchors{store_.robotAnchor(), store_.node(p.slot).anchor};
     const MeasurementInformation info = measurementInformation(sensor, x, store_.node(p.slot).mu, *p.z,
                                                                sensor.noise(*p.z).inverse(), p.jacobian_landmark,
-                                                               anchors);
+                                                               anchors, p.constraint);
     store_.addObservation(p.slot, info.H, info.b);  // links it to the robot: active
     infos_.push_back(info);
     anchors_.push_back(anchors);
@@ -134,7 +134,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
       if (p.first) continue;
       store_.addObservation(p.slot, -infos_[k].H, -infos_[k].b);
       infos_[k] = measurementInformation(sensor, xi, store_.node(p.slot).mu, *p.z, sensor.noise(*p.z).inverse(),
-                                         p.jacobian_landmark, anchors_[k]);
+                                         p.jacobian_landmark, anchors_[k], p.constraint);
       store_.addObservation(p.slot, infos_[k].H, infos_[k].b);
     }
   }

@@ -154,7 +154,7 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
   f.book_.ids_ = f.store_.ids();
   f.book_.slot_.clear();
   for (int s = 0; s < f.book_.size(); ++s) f.book_.slot_.emplace(f.book_.ids_[static_cast<std::size_t>(s)], s);
-  readFirstEstimates(in, f.book_.fej_, f.book_.linearization() == Linearization::FirstEstimates, f.store_.size());
+  readFirstEstimates(in, f.book_.fej_, LandmarkBook::keepsFirstEstimates(f.book_.linearization()), f.store_.size());
   const std::string rng = in.str("random engine state");
   std::istringstream is(rng);
   is >> f.rng_;

@@ -13,7 +13,8 @@ Linearization parseLinearization(std::string_view s) {
   if (s == "standard") return Linearization::Standard;
   if (s == "fej") return Linearization::FirstEstimates;
   if (s == "invariant") return Linearization::Invariant;
-  throw InvalidArgument("unknown linearization '" + std::string(s) + "' (expected standard, fej or invariant)");
+  if (s == "oc") return Linearization::ObservabilityConstrained;
+  throw InvalidArgument("unknown linearization '" + std::string(s) + "' (expected standard, fej, invariant or oc)");
 }
 
 std::string_view linearizationName(Linearization l) {
@@ -21,6 +22,7 @@ std::string_view linearizationName(Linearization l) {
     case Linearization::Standard: return "standard";
     case Linearization::FirstEstimates: return "fej";
     case Linearization::Invariant: return "invariant";
+    case Linearization::ObservabilityConstrained: return "oc";
   }
   return "standard";
 }

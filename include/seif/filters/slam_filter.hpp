@@ -37,9 +37,16 @@ enum class Linearization {
   /// correction is applied by the retraction chi = exp(xi) chi_hat. The linearised system
   /// keeps the three unobservable directions whatever the estimate.
   Invariant,
+  /// The observability-constrained EKF (Huang, Mourikis, Roumeliotis, IJRR 2010, OC-EKF):
+  /// the motion Jacobian's heading column from the pose predictions (as FirstEstimates), and
+  /// every measurement Jacobian taken at the current estimates, then changed as little as
+  /// possible (in the Frobenius norm) so that it annihilates the unobservable directions
+  /// N = [I J p; 0 1; I J l] at the predicted position p and the landmark's first estimate l:
+  /// J* = J - J N (N^T N)^-1 N^T.
+  ObservabilityConstrained,
 };
 
-/// "standard" | "fej" | "invariant". Throws InvalidArgument naming the valid names.
+/// "standard" | "fej" | "invariant" | "oc". Throws InvalidArgument naming the valid names.
 Linearization parseLinearization(std::string_view s);
 std::string_view linearizationName(Linearization l);
 
