@@ -21,6 +21,8 @@ struct ConsistencyArgs {
   int steps = 0;
   int runs = 50;
   std::uint64_t seed = 1;
+  double clutter = 0.0;
+  double detection_probability = 1.0;
   std::string filters = "batch,ekf,seif";
   int samples = 50;
   int jobs = 0;
@@ -34,6 +36,8 @@ void consistencyCommand(const ConsistencyArgs& args) {
   ConsistencyOptions options;
   options.world = presetConfig(parseWorldPreset(args.preset), args.landmarks, args.steps, args.seed);
   options.world.paper_path = parsePaperPath(args.path);
+  options.world.clutter = args.clutter;
+  options.world.detection_probability = args.detection_probability;
   options.runs = args.runs;
   options.samples = args.samples;
   options.threads = static_cast<unsigned>(args.jobs);
@@ -97,6 +101,7 @@ void addConsistencyCommand(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "simulator seed of run 0 (run r: seed + r)")
       ->transform(seedValue())
       ->capture_default_str();
+  addDetectionFlags(*cmd, args->clutter, args->detection_probability);
   cmd->add_option("--filters", args->filters,
                   "comma-separated filter specs; options continue a spec: ekf,seif:sparsify=eseif,beta=4")
       ->check(filterSpecs())

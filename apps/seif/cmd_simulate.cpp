@@ -17,6 +17,8 @@ struct SimulateArgs {
   int landmarks = 0;
   int steps = 0;
   std::uint64_t seed = 1;
+  double clutter = 0.0;
+  double detection_probability = 1.0;
   std::string out;
 };
 
@@ -24,6 +26,8 @@ void simulateCommand(const SimulateArgs& args) {
   requireOutputFolder(args.out);
   WorldConfig config = presetConfig(parseWorldPreset(args.preset), args.landmarks, args.steps, args.seed);
   config.paper_path = parsePaperPath(args.path);
+  config.clutter = args.clutter;
+  config.detection_probability = args.detection_probability;
   SimStats stats;
   const RobotLog log = simulate(config, &stats);
   writeMrclam(args.out, log);
@@ -31,6 +35,10 @@ void simulateCommand(const SimulateArgs& args) {
               args.preset.c_str(), config.landmarks, config.steps,
               static_cast<unsigned long long>(config.seed), stats.mean_detections_per_step,
               stats.distinct_landmarks_seen);
+  if (config.clutter > 0.0 || config.detection_probability < 1.0) {
+    std::printf("  %zu false detections (clutter, subject 0 in Barcodes.dat), %zu missed detections\n",
+                stats.clutter, stats.missed_detections);
+  }
   std::printf("  wrote %s (MRCLAM layout, robot 1, with meta.json)\n", args.out.c_str());
 }
 
@@ -59,6 +67,7 @@ void addSimulateCommand(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "seed of all randomness")
       ->transform(seedValue())
       ->capture_default_str();
+  addDetectionFlags(*cmd, args->clutter, args->detection_probability);
   cmd->add_option("--out", args->out, "output folder")->required();
   cmd->callback([args] { simulateCommand(*args); });
 }

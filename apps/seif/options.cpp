@@ -82,6 +82,27 @@ CLI::Validator seedValue() {
       "[0, 2^64-1]");
 }
 
+void addDetectionFlags(CLI::App& cmd, double& clutter, double& detection_probability) {
+  cmd.add_option("--clutter", clutter,
+                 "mean number of false detections per scan (Poisson, uniform in the sensor's footprint);\n"
+                 "they are observations of no landmark: a filter with known data association stops at\n"
+                 "the first one (docs/simulator.md)")
+      ->check([](const std::string& s) -> std::string {
+        const auto v = parseAll<double>(s);
+        if (!v || !std::isfinite(*v) || *v < 0.0) return "must be finite and >= 0, found " + s;
+        return {};
+      })
+      ->capture_default_str();
+  cmd.add_option("--detection-probability", detection_probability,
+                 "probability that a landmark in range is reported (each landmark, each scan)")
+      ->check([](const std::string& s) -> std::string {
+        const auto v = parseAll<double>(s);
+        if (!v || !(*v >= 0.0 && *v <= 1.0)) return "must be in [0, 1], found " + s;
+        return {};
+      })
+      ->capture_default_str();
+}
+
 void requireOutputFolder(const std::string& out) {
   if (out.empty()) throw InvalidArgument("--out: must not be empty");
   requireWritableDirectory(out);
@@ -112,6 +133,13 @@ void NoiseFlags::add(CLI::App& cmd) {
                  "sigma_bearing = sqrt(m11 / 10), sigma_range = sqrt(m11)), so that costs compare with GTSAM's")
       ->check(CLI::IsMember({"cartesian", "gtsam"}))
       ->capture_default_str();
+  cmd.add_option("--detections", detections,
+                 "Victoria Park: associated (tree_observations_associated_UTS.txt, trees named by the\n"
+                 "UTS association) or raw (tree_detections.txt, the tree detector's output with its\n"
+                 "spurious detections, no landmark ids: for unknown data association; the UTS ids are\n"
+                 "kept only to score an association). Another format with raw is a usage error")
+      ->check(CLI::IsMember({"associated", "raw"}))
+      ->capture_default_str();
 }
 
 DatasetOptions NoiseFlags::resolve() const {
@@ -121,6 +149,7 @@ DatasetOptions NoiseFlags::resolve() const {
   }
   if (!form.empty()) o.noise_form = parseNoiseForm(form);
   o.isam_landmarks_as_gtsam = isam_landmarks == "gtsam";
+  o.detections = parseDetections(detections);
   return o;
 }
 

@@ -35,6 +35,10 @@ CLI::Validator filterSpecs();
 /// A seed: a decimal integer in [0, 2^64 - 1]; like integerIn, for Option::transform().
 CLI::Validator seedValue();
 
+/// --clutter and --detection-probability of the commands that simulate (WorldConfig's
+/// clutter and detection_probability; docs/simulator.md "Clutter and missed detections").
+void addDetectionFlags(CLI::App& cmd, double& clutter, double& detection_probability);
+
 /// Checks a command's output folder before any work: empty is a usage error
 /// (InvalidArgument); otherwise seif::requireWritableDirectory, which creates the
 /// folder and throws DataError naming it when it is not a folder or not writable (exit 2).
@@ -47,6 +51,7 @@ struct NoiseFlags {
   std::map<std::string, std::optional<double>> sigmas;  ///< noise name -> value if given
   std::string form;                                      ///< --noise-form, empty: the format's
   std::string isam_landmarks = "cartesian";              ///< --isam-landmarks
+  std::string detections = "associated";                 ///< --detections
   void add(CLI::App& cmd);
   DatasetOptions resolve() const;
 };

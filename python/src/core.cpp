@@ -58,7 +58,9 @@ void bindCore(py::module_& m) {
       .def_readwrite("landmark", &Observation::landmark)
       .def_readwrite("z", &Observation::z)
       .def_readwrite("noise", &Observation::noise)
-      .def("__repr__", [](py::handle s) { return reprOf(s, {"landmark", "z", "noise"}); });
+      .def_readwrite("truth", &Observation::truth,
+                     "the id the data names for what was seen, to score an association only (UNKNOWN_LANDMARK: none)")
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"landmark", "z", "noise", "truth"}); });
 
   py::class_<NoiseModel>(m, "NoiseModel", "Standard deviations of control and measurement noise.")
       .def(py::init([](double sv, double sw, double sr, double sb) { return NoiseModel{sv, sw, sr, sb}; }),
@@ -236,7 +238,9 @@ void bindCore(py::module_& m) {
       .def_readwrite("w", &OdometryRecord::w)
       .def("__repr__", [](py::handle s) { return reprOf(s, {"time", "v", "w"}); });
 
-  py::class_<MeasurementRecord>(m, "MeasurementRecord", "MRCLAM measurement row: time, subject, range, bearing.")
+  m.attr("CLUTTER_SUBJECT") = kClutterSubject;
+  py::class_<MeasurementRecord>(m, "MeasurementRecord",
+                                "MRCLAM measurement row: time, subject (CLUTTER_SUBJECT: a false detection), range, bearing.")
       .def(py::init<>())
       .def_readwrite("time", &MeasurementRecord::time)
       .def_readwrite("subject", &MeasurementRecord::subject)

@@ -54,9 +54,14 @@ void bindSources(py::module_& m) {
       .value("Isam", DatasetFormat::Isam)
       .value("G2o", DatasetFormat::G2o);
 
+  bindNamedEnum<Detections>(m, "Detections", "'associated' | 'raw': the Victoria Park detections a reader gives",
+                            &parseDetections, &detectionsName)
+      .value("Associated", Detections::Associated)
+      .value("Raw", Detections::Raw);
+
   py::class_<DatasetOptions>(m, "DatasetOptions", "What a reader opens with (io/event_source.hpp).")
       .def(py::init([](int robot, const std::map<std::string, double>& noise, const std::optional<NoiseForm>& form) {
-             return DatasetOptions{robot, noise, form, false};
+             return DatasetOptions{robot, noise, form, false, Detections::Associated};
            }),
            py::arg("robot") = 1, py::arg("noise") = std::map<std::string, double>{},
            py::arg("noise_form") = py::none())
@@ -65,7 +70,12 @@ void bindSources(py::module_& m) {
       .def_readwrite("noise_form", &DatasetOptions::noise_form, "NoiseForm, or None for the format's default")
       .def_readwrite("isam_landmarks_as_gtsam", &DatasetOptions::isam_landmarks_as_gtsam,
                      "iSAM LANDMARK records read as GTSAM's loader does (bearing-range, its heuristic noise)")
-      .def("__repr__", [](py::handle s) { return reprOf(s, {"robot", "noise", "noise_form", "isam_landmarks_as_gtsam"}); });
+      .def_readwrite("detections", &DatasetOptions::detections,
+                     "Victoria Park: Detections.Associated (the UTS file) or Detections.Raw (tree_detections.txt, "
+                     "landmark unknown, truth from the UTS file)")
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"robot", "noise", "noise_form", "isam_landmarks_as_gtsam", "detections"});
+      });
 
   py::class_<EventSource>(m, "EventSource",
                           "A dataset streamed as time-ordered events: iterate it for ControlEvent, "
@@ -132,9 +142,13 @@ void bindSimulator(py::module_& m) {
       .def_readwrite("speed", &WorldConfig::speed)
       .def_readwrite("density", &WorldConfig::density)
       .def_readwrite("corridor_width", &WorldConfig::corridor_width)
+      .def_readwrite("clutter", &WorldConfig::clutter,
+                     "mean false detections per scan (Poisson, uniform in the footprint; subject CLUTTER_SUBJECT)")
+      .def_readwrite("detection_probability", &WorldConfig::detection_probability,
+                     "probability that a landmark in range is reported")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"preset", "paper_path", "landmarks", "steps", "seed", "noise", "sensor_range", "min_range",
-                          "dt", "speed", "density", "corridor_width"});
+                          "dt", "speed", "density", "corridor_width", "clutter", "detection_probability"});
       });
   m.def("preset_config", &presetConfig, py::arg("preset") = WorldPreset::Paper, py::arg("landmarks") = 0,
         py::arg("steps") = 0, py::arg("seed") = 1,
@@ -149,6 +163,8 @@ void bindSimulator(py::module_& m) {
       .def_readonly("steps_without_detection", &SimStats::steps_without_detection)
       .def_readonly("distinct_landmarks_seen", &SimStats::distinct_landmarks_seen)
       .def_readonly("ranges_below_minimum", &SimStats::ranges_below_minimum)
+      .def_readonly("missed_detections", &SimStats::missed_detections)
+      .def_readonly("clutter", &SimStats::clutter)
       .def_readonly("max_tracking_error", &SimStats::max_tracking_error);
 
   m.def(

@@ -71,3 +71,37 @@ def test_robot_log_source_runs_like_the_dataset():
     seif.run_filter(g, data)
     assert out.steps == len(data)
     np.testing.assert_array_equal(f.mean(), g.mean())
+
+
+def test_raw_victoria_park_detections_and_their_truth(tmp_path):
+    (tmp_path / "controls.txt").write_text("1.0 2.0 0.1\n2.0 2.0 0.1\n")
+    (tmp_path / "tree_detections.txt").write_text("1.5 0 10.0 1.5 0.3\n1.5 0 20.0 3.141593 0.2\n")
+    (tmp_path / "tree_observations_associated_UTS.txt").write_text("1.5 10.0 1.5 7 0 0\n")
+    options = seif.DatasetOptions()
+    assert options.detections == seif.Detections.Associated
+    options.detections = "raw"
+    assert "detections" in repr(options)
+    scans = [e for e in seif.open_dataset(str(tmp_path), "auto", options) if isinstance(e, seif.ObservationEvent)]
+    z = scans[0].observations
+    assert [o.landmark for o in z] == [seif.UNKNOWN_LANDMARK] * 2
+    assert [o.truth for o in z] == [7, seif.UNKNOWN_LANDMARK]
+    assert z[1].z[1] == pytest.approx(np.pi / 2, abs=0)
+    associated = [e for e in seif.open_dataset(str(tmp_path)) if isinstance(e, seif.ObservationEvent)]
+    assert [(o.landmark, o.truth) for o in associated[0].observations] == [(7, 7)]
+    with pytest.raises(seif.InvalidArgument):
+        seif.open_dataset(str(tmp_path), "mrclam", options)
+
+
+def test_simulator_clutter_and_missed_detections():
+    config = seif.preset_config("paper", 0, 200, 4)
+    assert (config.clutter, config.detection_probability) == (0.0, 1.0)
+    config.clutter = 1.0
+    config.detection_probability = 0.9
+    assert "clutter" in repr(config)
+    log, stats = seif.simulate_with_stats(config)
+    clutter = [m for m in log.measurements if m.subject == seif.CLUTTER_SUBJECT]
+    assert len(clutter) == stats.clutter > 100
+    assert stats.missed_detections > 0
+    truths = [(z.landmark, z.truth) for step in seif.build_dataset(log).steps for z in step.observations]
+    assert sum(1 for lm, t in truths if t == seif.UNKNOWN_LANDMARK and lm == seif.UNKNOWN_LANDMARK) == len(clutter)
+    assert all(lm == t for lm, t in truths)

@@ -63,7 +63,7 @@ Dataset buildDataset(const RobotLog& log) {
       s.u = VelocityControl{odo[i].v, odo[i].w, s.time - now};
       while (m < order.size() && meas[order[m]].time == s.time) {
         const MeasurementRecord& r = meas[order[m]];
-        s.observations.push_back(Observation{r.subject, Vec2(r.range, r.bearing), std::nullopt});
+        s.observations.push_back(observationOf(r));
         ++m;
       }
       now = s.time;

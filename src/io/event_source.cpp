@@ -31,6 +31,16 @@ std::string_view datasetFormatName(DatasetFormat format) {
   return "?";
 }
 
+Detections parseDetections(std::string_view name) {
+  if (name == "associated") return Detections::Associated;
+  if (name == "raw") return Detections::Raw;
+  throw InvalidArgument("unknown detections '" + std::string(name) + "' (expected associated or raw)");
+}
+
+std::string_view detectionsName(Detections detections) {
+  return detections == Detections::Raw ? "raw" : "associated";
+}
+
 void checkNoiseNames(const DatasetOptions& options, const std::vector<std::string>& known, std::string_view format) {
   for (const auto& [name, value] : options.noise) {
     bool found = false;

@@ -219,6 +219,7 @@ class GraphSource final : public EventSource {
     claim(landmark, Kind::Landmark, 2);
     if (landmark > std::numeric_limits<int>::max()) table_.fail("landmark id " + std::to_string(landmark) + " is too large");
     z.landmark = static_cast<int>(landmark);
+    z.truth = z.landmark;
     if (!pending_) pending_ = ObservationEvent{static_cast<double>(k_), {}};
     pending_->observations.push_back(std::move(z));
   }

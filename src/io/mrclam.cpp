@@ -117,7 +117,7 @@ Barcodes parseBarcodes(TextTable& t) {
     t.expect({"subject", "barcode"});
     const int subject = t.integer(0);
     const int barcode = t.integer(1);
-    if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
+    if (subject < kClutterSubject) t.fail("subject number " + std::to_string(subject) + " must not be negative");
     if (barcode < 0) t.fail("barcode " + std::to_string(barcode) + " must not be negative");
     if (const auto [it, fresh] = barcode_line.emplace(barcode, t.line()); !fresh) {
       t.fail("barcode " + std::to_string(barcode) + " listed twice (first on line " + std::to_string(it->second) + ")");
@@ -287,6 +287,7 @@ void validateForWriting(const fs::path& dir, const RobotLog& log, const std::set
   }
   const std::string barcodes = (dir / "Barcodes.dat").string();
   for (const int s : subjects) {
+    if (s == kClutterSubject && !log.landmarks.contains(s)) continue;  // clutter (measurements only)
     if (s <= kLastRobot) {
       throw DataError(barcodes, 0, "landmark subject " + std::to_string(s) +
                                        " is not allowed: subjects 1-5 are robots");

@@ -70,7 +70,7 @@ class MrclamSource final : public EventSource {
     if (measurement_time_ == t) {
       ObservationEvent obs{t, {}};
       while (measurement_time_ == t) {
-        obs.observations.push_back({measurement_.subject, Vec2(measurement_.range, measurement_.bearing), std::nullopt});
+        obs.observations.push_back(observationOf(measurement_));
         advanceMeasurement();
       }
       event = std::move(obs);

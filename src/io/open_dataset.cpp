@@ -22,9 +22,13 @@ std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path, Data
       throw DataError(path.string(), 0,
                       "cannot tell the dataset's format; pass --format with one of: mrclam (a folder with "
                       "Barcodes.dat and RobotN_Odometry.dat), victoria-park (a folder with controls.txt and "
-                      "tree_observations_associated_UTS.txt), isam (a text file of ODOMETRY / LANDMARK / BR "
+                      "tree_observations_associated_UTS.txt or tree_detections.txt), isam (a text file of ODOMETRY / LANDMARK / BR "
                       "records), g2o (a text file of VERTEX_SE2 / VERTEX_XY / EDGE_SE2 / EDGE_SE2_XY records)");
     }
+  }
+  if (options.detections == Detections::Raw && format != DatasetFormat::VictoriaPark) {
+    throw InvalidArgument("raw detections are read from a Victoria Park folder only (tree_detections.txt); " +
+                          path.string() + " is read as " + std::string(datasetFormatName(format)));
   }
   switch (format) {
     case DatasetFormat::Mrclam: return openMrclam(path, options);

@@ -32,7 +32,7 @@ bool RobotLogSource::next(Event& event) {
     ObservationEvent obs{t_meas, {}};
     while (measurement_ < log_.measurements.size() && log_.measurements[measurement_].time == t_meas) {
       const MeasurementRecord& m = log_.measurements[measurement_++];
-      obs.observations.push_back({m.subject, Vec2(m.range, m.bearing), std::nullopt});
+      obs.observations.push_back(observationOf(m));
     }
     event = std::move(obs);
   } else {

@@ -1,6 +1,7 @@
 // The strict text-table parser shared by every reader (include/seif/io/text_table.hpp).
 #include "io/text_table.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <system_error>
@@ -175,6 +176,25 @@ long long TextTable::index(std::size_t col) const {
     fail("bad id " + quotedField(f) + " in " + columnName(col) + " (expected an integer >= 0)");
   }
   return value;
+}
+
+double TextTable::halfUnit(std::size_t col) const {
+  const std::string_view f = fields_[col];
+  const std::size_t e = f.find_first_of("eE");
+  const std::string_view mantissa = f.substr(0, e);
+  const std::size_t dot = mantissa.find('.');
+  long decimals = dot == std::string_view::npos ? 0 : static_cast<long>(mantissa.size() - dot - 1);
+  if (e != std::string_view::npos) {
+    std::string_view exponent = f.substr(e + 1);
+    if (!exponent.empty() && exponent[0] == '+') exponent.remove_prefix(1);
+    long x = 0;
+    const auto res = std::from_chars(exponent.data(), exponent.data() + exponent.size(), x);
+    if (res.ec != std::errc() || res.ptr != exponent.data() + exponent.size()) {
+      fail("bad number " + quotedField(f) + " in " + columnName(col));
+    }
+    decimals -= std::clamp(x, -100000L, 100000L);
+  }
+  return 0.5 * std::pow(10.0, -static_cast<double>(decimals));
 }
 
 void TextTable::fail(const std::string& what) const { throw DataError(name_, line_, what); }

@@ -58,6 +58,9 @@ class TextTable {
   double real(std::size_t col) const;
   int integer(std::size_t col) const;
   long long index(std::size_t col) const;
+  /// Half a unit of the last printed decimal of column `col` as written ("3.141593":
+  /// 5e-7, "12": 0.5, "1.5e-3": 5e-5): the precision the file gives the value.
+  double halfUnit(std::size_t col) const;
 
   [[noreturn]] void fail(const std::string& what) const;
   /// "column 3 (range)", or "column 3" when the columns have no names.

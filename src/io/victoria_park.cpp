@@ -3,10 +3,12 @@
 #include "io/victoria_park.hpp"
 #include <seif/models/range_bearing.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <vector>
 
 namespace seif {
 namespace {
@@ -32,13 +34,59 @@ struct Cursor {
   double time = kNever;  // stamp of the row held, kNever at the end
 };
 
+constexpr const char* kAssociated = "tree_observations_associated_UTS.txt";
+constexpr const char* kRaw = "tree_detections.txt";
+const std::initializer_list<const char*> kAssociatedColumns = {"time", "range", "angle_laser", "feature_id", "x_est", "y_est"};
+const std::initializer_list<const char*> kRawColumns = {"time", "scan_index", "range", "angle_laser", "diameter"};
+
+/// The laser angle of column `col` in [0, pi]. A value within its printed precision (half a
+/// unit of the last decimal written) of [0, pi] is clamped into it: 3.141593 is pi as printed.
+double laserAngle(const TextTable& r, std::size_t col) {
+  const double angle = r.real(col);
+  if (angle >= 0.0 && angle <= kPi) return angle;
+  const double h = r.halfUnit(col);
+  if (angle < -h || angle > kPi + h) {
+    r.fail("laser angle " + formatDouble(angle) + " is outside [0, pi] (beyond its printed precision " +
+           formatDouble(h) + ")");
+  }
+  return std::clamp(angle, 0.0, kPi);
+}
+
+double positiveRange(const TextTable& r, std::size_t col) {
+  const double range = r.real(col);
+  if (!(range > 0.0)) r.fail("range " + formatDouble(range) + " must be positive");
+  return range;
+}
+
+/// A row of the UTS file, checked: (range, angle, feature id).
+struct AssociatedRow {
+  double range = 0.0, angle = 0.0;
+  int id = kUnknownLandmark;
+  double range_half = 0.0, angle_half = 0.0;  // printed precision, for matching raw detections
+  bool used = false;
+};
+
+AssociatedRow associatedRow(const TextTable& r) {
+  AssociatedRow a;
+  a.range = positiveRange(r, 1);
+  a.angle = laserAngle(r, 2);
+  const long long id = r.index(3);
+  r.real(4);  // the distributor's estimate: checked, not used
+  r.real(5);
+  if (id > std::numeric_limits<int>::max()) r.fail("feature id " + std::to_string(id) + " is too large");
+  a.id = static_cast<int>(id);
+  a.range_half = r.halfUnit(1);
+  a.angle_half = r.halfUnit(2);
+  return a;
+}
+
 class VictoriaParkSource final : public EventSource {
  public:
   using Opener = std::function<std::optional<TextTable>(const char* name)>;
 
   VictoriaParkSource(const std::string& folder, const Opener& open, std::size_t controls_size,
                      const DatasetOptions& options)
-      : controls_size_(controls_size) {
+      : raw_(options.detections == Detections::Raw), controls_size_(controls_size) {
     checkNoiseNames(options, {"sigma_speed", "sigma_steering", "sigma_range", "sigma_bearing"}, "victoria-park");
     info_.source = folder;
     info_.format = "victoria-park";
@@ -51,16 +99,17 @@ class VictoriaParkSource final : public EventSource {
     info_.motion = std::make_shared<AckermannModel>(victoriaParkGeometry(), s_speed, s_steer, form);
     info_.sensor = std::make_shared<RangeBearingModel>(s_range, s_bearing);  // at the state: the laser
     info_.start_pose_source = "origin, heading 0: the dataset gives no initial pose (GPS is compared after a rigid alignment)";
+    const char* detections = raw_ ? kRaw : kAssociated;
     controls_.table = open("controls.txt");
-    observations_.table = open("tree_observations_associated_UTS.txt");
+    observations_.table = open(detections);
     if (!controls_.table) throw DataError((fs::path(folder) / "controls.txt").string(), 0, "missing required file");
-    if (!observations_.table) {
-      throw DataError((fs::path(folder) / "tree_observations_associated_UTS.txt").string(), 0, "missing required file");
-    }
+    if (!observations_.table) throw DataError((fs::path(folder) / detections).string(), 0, "missing required file");
+    if (raw_) truth_.table = open(kAssociated);  // optional: only to score an association
     gps_.table = open("gps.txt");
     info_.has_gps = gps_.table.has_value();
     advance(controls_, {"time", "speed", "steering"});
-    advance(observations_, {"time", "range", "angle_laser", "feature_id", "x_est", "y_est"});
+    advance(observations_, raw_ ? kRawColumns : kAssociatedColumns);
+    advance(truth_, kAssociatedColumns);
     advance(gps_, {"time", "x", "y"});
   }
 
@@ -69,23 +118,35 @@ class VictoriaParkSource final : public EventSource {
     if (controls_size_ == 0 || !controls_.table) return 1.0;
     return std::min(1.0, static_cast<double>(controls_read_) / static_cast<double>(controls_size_));
   }
+  std::map<std::string, std::size_t> dropped() const override {
+    if (!raw_ || !truth_.table) return {};
+    return {{"associated_rows_without_raw_detection", unmatched_truth_}};
+  }
 
   bool next(Event& event) override {
     const double t = std::min({controls_.time, observations_.time, gps_.time});
-    if (t == kNever) return false;
+    if (t == kNever) {
+      if (raw_) truthWindow(kNever);  // counts the UTS rows no detection matched
+      return false;
+    }
     if (observations_.time == t) {
       ObservationEvent obs{t, {}};
+      if (raw_) truthWindow(t);
       while (observations_.time == t) {
         const TextTable& r = *observations_.table;
-        const double range = r.real(1), angle = r.real(2);
-        const long long id = r.index(3);
-        r.real(4);  // the distributor's estimate: checked, not used
-        r.real(5);
-        if (!(range > 0.0)) r.fail("range " + formatDouble(range) + " must be positive");
-        if (angle < 0.0 || angle > kPi) r.fail("laser angle " + formatDouble(angle) + " is outside [0, pi]");
-        if (id > std::numeric_limits<int>::max()) r.fail("feature id " + std::to_string(id) + " is too large");
-        obs.observations.push_back({static_cast<int>(id), Vec2(range, angle - kPi / 2), std::nullopt});
-        advance(observations_, {"time", "range", "angle_laser", "feature_id", "x_est", "y_est"});
+        if (raw_) {
+          r.index(1);  // scan index: checked, not used
+          const double range = positiveRange(r, 2), angle = laserAngle(r, 3);
+          const double diameter = r.real(4);  // checked, not used
+          if (diameter < 0.0) r.fail("diameter " + formatDouble(diameter) + " must not be negative");
+          Observation z{kUnknownLandmark, Vec2(range, angle - kPi / 2), std::nullopt};
+          z.truth = matchTruth(range, angle, r.halfUnit(2), r.halfUnit(3));
+          obs.observations.push_back(z);
+        } else {
+          const AssociatedRow a = associatedRow(r);
+          obs.observations.push_back({a.id, Vec2(a.range, a.angle - kPi / 2), std::nullopt, a.id});
+        }
+        advance(observations_, raw_ ? kRawColumns : kAssociatedColumns);
       }
       event = std::move(obs);
     } else if (controls_.time == t) {
@@ -114,8 +175,53 @@ class VictoriaParkSource final : public EventSource {
     c.order.check(*c.table, c.time);
   }
 
+  /// The UTS rows stamped `t` (both files carry the laser scan's stamp), the only ones a raw
+  /// detection at `t` can match; rows left behind unmatched are counted.
+  void truthWindow(double t) {
+    if (window_time_ == t) return;
+    for (const AssociatedRow& a : window_) unmatched_truth_ += a.used ? 0 : 1;
+    window_.clear();
+    window_time_ = t;
+    while (truth_.time < t) {  // a stamp with no raw detection
+      associatedRow(*truth_.table);
+      ++unmatched_truth_;
+      advance(truth_, kAssociatedColumns);
+    }
+    while (truth_.time == t && t != kNever) {
+      window_.push_back(associatedRow(*truth_.table));
+      advance(truth_, kAssociatedColumns);
+    }
+  }
+
+  /// The feature id of the unused UTS row at this stamp that is the same detection: range
+  /// and angle equal within what both files print (the sum of their half units), nearest
+  /// first; kUnknownLandmark when there is none.
+  int matchTruth(double range, double angle, double range_half, double angle_half) {
+    AssociatedRow* best = nullptr;
+    double best_distance = kNever;
+    for (AssociatedRow& a : window_) {
+      if (a.used) continue;
+      const auto ratio = [](double diff, double tolerance) { return diff == 0.0 ? 0.0 : diff / tolerance; };
+      const double d = std::max(ratio(std::abs(range - a.range), range_half + a.range_half),
+                                ratio(std::abs(angle - a.angle), angle_half + a.angle_half));
+      constexpr double kSlack = 1.0 + 1e-9;  // the decimal values rounded to binary
+      if (d <= kSlack && d < best_distance) {
+        best = &a;
+        best_distance = d;
+      }
+    }
+    if (!best) return kUnknownLandmark;
+    best->used = true;
+    return best->id;
+  }
+
+  bool raw_ = false;
   DatasetInfo info_;
   Cursor controls_, observations_, gps_;
+  Cursor truth_;  // raw: the UTS file, read alongside for the truth ids
+  std::vector<AssociatedRow> window_;
+  double window_time_ = -kNever;
+  std::size_t unmatched_truth_ = 0;
   std::size_t controls_size_ = 0;  // rows (memory) or bytes (file) of controls.txt, for progress()
   std::size_t controls_read_ = 0;
 };
@@ -127,7 +233,7 @@ AckermannGeometry victoriaParkGeometry() { return {2.83, 0.76, Vec2(3.78, 0.50)}
 bool looksLikeVictoriaPark(const fs::path& path) {
   std::error_code ec;
   return fs::is_directory(path, ec) && fs::exists(path / "controls.txt", ec) &&
-         fs::exists(path / "tree_observations_associated_UTS.txt", ec);
+         (fs::exists(path / kAssociated, ec) || fs::exists(path / kRaw, ec));
 }
 
 std::unique_ptr<EventSource> openVictoriaPark(const fs::path& dir, const DatasetOptions& options) {

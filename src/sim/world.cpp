@@ -1,6 +1,9 @@
 // The simulator (docs/simulator.md). Order of the random draws, fixed: all landmarks
 // (x then y, by subject), then per step k: the control noise (e_v, e_w), then for each
-// detection in subject order the measurement noise (e_range, e_bearing).
+// landmark in range in subject order its detection draw (a uniform, only when
+// detection_probability < 1) and, when detected, the measurement noise (e_range,
+// e_bearing), then, only when clutter > 0, the number of false detections (one uniform per
+// Poisson chunk) and for each its range and bearing (two uniforms).
 #include <seif/core/errors.hpp>
 #include <seif/sim/world.hpp>
 
@@ -66,6 +69,27 @@ class Rng {
   explicit Rng(std::uint64_t seed) : engine_(seed) {}
   /// Uniform on [0, 1) with 53 random bits.
   double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
+  /// A Poisson count of mean `mean` by inversion, one uniform per chunk of mean at most
+  /// kPoissonChunk (a sum of independent Poisson counts is Poisson; exp(-chunk) stays normal).
+  std::size_t poisson(double mean) {
+    constexpr double kPoissonChunk = 256.0;
+    std::size_t n = 0;
+    while (mean > 0.0) {
+      const double m = std::min(mean, kPoissonChunk);
+      mean -= m;
+      const double u = uniform();
+      double p = std::exp(-m);
+      double cdf = p;
+      std::size_t k = 0;
+      while (u >= cdf && p > 0.0) {  // p underflows past the tail if cdf rounds below u
+        ++k;
+        p *= m / static_cast<double>(k);
+        cdf += p;
+      }
+      n += k;
+    }
+    return n;
+  }
   /// Two independent standard normals (Box-Muller; consumes exactly two engine outputs).
   std::pair<double, double> normalPair() {
     const double u1 = static_cast<double>((engine_() >> 11) + 1) * 0x1.0p-53;  // (0, 1]
@@ -155,6 +179,9 @@ void validate(const WorldConfig& c) {
           got("noise.sigma_range must be finite and >= 0", c.noise.sigma_range));
   require(sigma(c.noise.sigma_bearing),
           got("noise.sigma_bearing must be finite and >= 0", c.noise.sigma_bearing));
+  require(std::isfinite(c.clutter) && c.clutter >= 0.0, got("clutter must be finite and >= 0", c.clutter));
+  require(c.detection_probability >= 0.0 && c.detection_probability <= 1.0,
+          got("detection_probability must be in [0, 1]", c.detection_probability));
   if (c.preset == WorldPreset::Corridor) {
     require(std::isfinite(corridorLength(c)), "corridor length landmarks / (density * width) overflows");
   }
@@ -301,7 +328,10 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
     source << "simulated " << worldPresetName(c.preset) << " world (";
     if (c.preset == WorldPreset::Paper) source << paperPathName(c.paper_path) << " path, ";
     source << c.landmarks
-           << " landmarks, " << c.steps << " steps, seed " << c.seed << ")";
+           << " landmarks, " << c.steps << " steps, seed " << c.seed;
+    if (c.detection_probability < 1.0) source << ", detection probability " << c.detection_probability;
+    if (c.clutter > 0.0) source << ", clutter " << c.clutter << " per scan";
+    source << ")";
     log.source = source.str();
   }
   log.robot = 1;
@@ -316,7 +346,7 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
      // growing a vector of millions of measurements. Only a hint: the vector still grows.
     const double per_step = std::min(static_cast<double>(n), n / (extent.x() * extent.y()) *
                                                                  kPi * c.sensor_range * c.sensor_range);
-    const double expected = 1.1 * per_step * static_cast<double>(T) + 64.0;
+    const double expected = 1.1 * (per_step + c.clutter) * static_cast<double>(T) + 64.0;
     log.measurements.reserve(static_cast<std::size_t>(std::min(expected, 0x1.0p27)));
   }
 
@@ -352,6 +382,10 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
     st.max_detections_per_step = std::max(st.max_detections_per_step, found.size());
     if (found.empty()) ++st.steps_without_detection;
     for (const std::uint32_t i : found) {
+      if (c.detection_probability < 1.0 && !(rng.uniform() < c.detection_probability)) {
+        ++st.missed_detections;
+        continue;
+      }
       const Vec2 z = sensor.predict(x, landmarks[i]);
       const auto [e_r, e_b] = rng.normalPair();
       const double range = z.x() + c.noise.sigma_range * e_r;
@@ -362,6 +396,17 @@ RobotLog simulate(const WorldConfig& config, SimStats* stats) {
       log.measurements.push_back({t, kFirstSubject + static_cast<int>(i), range,
                                   wrapAngle(z.y() + c.noise.sigma_bearing * e_b)});
       seen[i] = 1;
+    }
+    if (c.clutter > 0.0) {  // false detections, area-uniform in the footprint, after the real ones
+      const std::size_t count = rng.poisson(c.clutter);
+      const double r0 = blind_zone * blind_zone;
+      const double r1 = c.sensor_range * c.sensor_range;
+      for (std::size_t j = 0; j < count; ++j) {
+        const double range = std::clamp(std::sqrt(r0 + rng.uniform() * (r1 - r0)), blind_zone, c.sensor_range);
+        const double bearing = wrapAngle(-kPi + 2.0 * kPi * rng.uniform());
+        log.measurements.push_back({t, kClutterSubject, range, bearing});
+      }
+      st.clutter += count;
     }
   }
   // A final stop command stamped T dt closes the last control interval, so that a reader

@@ -25,10 +25,22 @@ struct OdometryRecord {
 
 struct MeasurementRecord {
   double time = 0.0;
-  int subject = -1;  ///< landmark subject number (after mapping the barcode)
+  int subject = -1;  ///< landmark subject number (after mapping the barcode); kClutterSubject: none
   double range = 0.0;
   double bearing = 0.0;
 };
+
+/// The subject of a false detection (the simulator's clutter): no landmark. MRCLAM numbers
+/// robots 1-5 and landmarks from 6; seif's own folders list clutter as subject 0 in
+/// Barcodes.dat (io/mrclam.hpp), which the UTIAS data never do.
+inline constexpr int kClutterSubject = 0;
+
+/// The observation a measurement record makes: landmark = truth = subject, and for clutter
+/// neither (kUnknownLandmark): a filter with known association refuses it (ModelError).
+inline Observation observationOf(const MeasurementRecord& m) {
+  const int id = m.subject == kClutterSubject ? kUnknownLandmark : m.subject;
+  return Observation{id, Vec2(m.range, m.bearing), std::nullopt, id};
+}
 
 struct TimedPose {
   double time = 0.0;
@@ -112,8 +124,8 @@ struct Dataset {
 /// Precisely: step times are the odometry stamps after the first and the measurement stamps
 /// (at or after the first odometry stamp); each step predicts with the control in force
 /// from the previous step's time (start_time for the first) up to its own time, then
-/// applies every measurement with exactly that stamp (in log order; Observation::landmark =
-/// subject). Steps with dt == 0 and no observation are not emitted, so the sum of all dt is
+/// applies every measurement with exactly that stamp (in log order; observationOf(): landmark
+/// = truth = subject, clutter has neither). Steps with dt == 0 and no observation are not emitted, so the sum of all dt is
 /// the last step time minus start_time. start_time = first odometry stamp. With no odometry
 /// at all, every measurement is dropped as before_first_control and there are no steps.
 /// Throws DataError (naming log.source) if the odometry stamps go backwards.

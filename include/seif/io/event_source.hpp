@@ -45,6 +45,16 @@ struct DatasetInfo {
   bool has_gps = false;           ///< the stream carries GpsFix events
 };
 
+/// Which detections a Victoria Park folder gives (io/victoria_park.hpp): Associated, the
+/// UTS file's (tree_observations_associated_UTS.txt: landmark = truth = its feature id), or
+/// Raw, the tree detector's (tree_detections.txt: landmark unknown, truth = the feature id
+/// of the UTS row that is the same detection, when there is one).
+enum class Detections { Associated, Raw };
+
+/// "associated" | "raw"; throws InvalidArgument naming them.
+Detections parseDetections(std::string_view name);
+std::string_view detectionsName(Detections detections);
+
 /// What a reader opens with. Noise values by name override the file's and the format's
 /// defaults (their source becomes "command line"); a name the format does not use is an
 /// error naming the names it does use.
@@ -59,6 +69,9 @@ struct DatasetOptions {
   /// sigma_bearing = sqrt(m11 / 10) and sigma_range = sqrt(m11) (its heuristic), so that a
   /// cost is comparable with GTSAM's on the same file.
   bool isam_landmarks_as_gtsam = false;
+  /// Victoria Park: the associated or the raw detections; Raw with another format is an
+  /// InvalidArgument (openDataset).
+  Detections detections = Detections::Associated;
 };
 
 class EventSource {

@@ -16,6 +16,11 @@
 // a negative standard deviation, a barcode or subject listed twice in Barcodes.dat, a
 // landmark listed twice or with a robot subject (1-5) in Landmark_Groundtruth.dat.
 //
+// Clutter: subject 0 (kClutterSubject, core/dataset.hpp) in Barcodes.dat names the barcode of
+// false detections, which seif's simulator writes with clutter configured (the UTIAS data
+// have no subject 0). Its measurements are read with subject 0 and become observations of
+// no landmark (observationOf); subject 0 is never a landmark in Landmark_Groundtruth.dat.
+//
 // meta.json: {"format": "seif-mrclam", "robot": N, "noise": {"sigma_v": .., "sigma_w": ..,
 // "sigma_range": .., "sigma_bearing": ..}}. Every key is optional; when "noise" is present
 // all four sigmas must be finite numbers > 0 (the writer refuses to write others). "robot",
@@ -67,7 +72,7 @@ std::optional<NoiseModel> readMetaJson(std::string_view text, const std::string&
 /// assigned to the landmark subjects, and meta.json when log.noise is set.
 ///
 /// Barcodes: subject s (robots 1-5 and every landmark subject of log.landmarks and
-/// log.measurements) gets barcode 100 + s. Doubles are written in the shortest form that
+/// log.measurements, and clutter's subject 0 when a measurement has it) gets barcode 100 + s. Doubles are written in the shortest form that
 /// reads back bit-identical, so readMrclam(dir, log.robot) returns `log` again (except
 /// `source`, which becomes `dir`, and `dropped`, which is not stored). The folder-level files
 /// (Barcodes.dat, Landmark_Groundtruth.dat, meta.json) are overwritten; an existing

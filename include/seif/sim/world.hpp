@@ -5,8 +5,11 @@
 // take the same road to the filters. Worlds, paths, controller and noise: docs/simulator.md.
 //
 // Everything random comes from one std::mt19937_64 seeded with WorldConfig::seed and drawn
-// in a fixed order (landmarks, then per step: motion noise, then the measurement noise of
-// the detections in subject order), so one config gives a bit-identical log.
+// in a fixed order (landmarks, then per step: motion noise, then per landmark in range in
+// subject order its detection draw (only when detection_probability < 1) and, if detected,
+// its measurement noise, then (only when clutter > 0) the number of false detections and
+// each one's range and bearing), so one config gives a bit-identical log; the defaults draw
+// nothing for clutter or missed detections.
 #include <seif/core/types.hpp>
 #include <seif/core/dataset.hpp>
 
@@ -67,6 +70,13 @@ struct WorldConfig {
   /// Corridor (length N / (density * corridor_width)); the Paper square is always [0, 1]^2.
   double density = 50.0;
   double corridor_width = 0.4;  ///< width of the Corridor strip, centred on its axis
+  /// Mean number of false detections per scan (Poisson), uniform over the sensor's footprint:
+  /// area-uniform between the blind zone (min_range) and sensor_range, bearing uniform over
+  /// the field of view (all around). Logged with subject kClutterSubject (core/dataset.hpp):
+  /// observations of no landmark, which a filter with known association refuses.
+  double clutter = 0.0;
+  /// Probability that a landmark in range is reported (independently per landmark and scan).
+  double detection_probability = 1.0;
 };
 
 /// The preset's configuration with N = `landmarks` and T = `steps`; a value <= 0 selects
@@ -83,7 +93,7 @@ struct SimStats {
   /// index makes this independent of N at constant density.
   std::size_t candidates_checked_max_per_step = 0;
   std::size_t candidates_checked_total = 0;
-  std::size_t measurements = 0;             ///< detections logged
+  std::size_t measurements = 0;             ///< detections logged (clutter included)
   double mean_detections_per_step = 0.0;    ///< measurements / steps
   std::size_t max_detections_per_step = 0;
   std::size_t steps_without_detection = 0;
@@ -91,6 +101,8 @@ struct SimStats {
   /// Detections dropped because the noisy range came out below the blind zone (the same
   /// threshold as for the true range): the sensor reports nothing there.
   std::size_t ranges_below_minimum = 0;
+  std::size_t missed_detections = 0;  ///< landmarks in range not reported (detection_probability)
+  std::size_t clutter = 0;            ///< false detections logged (included in measurements)
   /// Largest distance between the true position and the reference point the controller
   /// tracks: how far the noisy robot strayed from its path.
   double max_tracking_error = 0.0;
@@ -98,7 +110,8 @@ struct SimStats {
 
 /// Runs the simulation (docs/simulator.md). Throws InvalidArgument for an invalid
 /// config (landmarks < 1, steps < 1, non-positive or non-finite sensor_range, dt, speed,
-/// density or corridor_width, negative or non-finite noise sigmas). Fills `stats` if given.
+/// density or corridor_width, negative or non-finite noise sigmas, clutter negative or not
+/// finite, detection_probability outside [0, 1]). Fills `stats` if given.
 RobotLog simulate(const WorldConfig& config, SimStats* stats = nullptr);
 
 }  // namespace seif
