@@ -139,7 +139,8 @@ RunOutput runFilter(SlamFilter& filter, const Dataset& data,
 }
 
 RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function<void(double)>& progress,
-                    bool pose_covariances, const RunCheckpointing& checkpointing, const RunResume* resume) {
+                    bool pose_covariances, const RunCheckpointing& checkpointing, const RunResume* resume,
+                    Associator* associator) {
   RunOutput out;
   if (resume) out = resume->output;
   StepAssembler steps;
@@ -155,7 +156,13 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
   if (checkpointing.every > 0) observers.push_back(&checkpoints);
   RunLoopOptions options;
   if (resume) options.start_step = resume->steps;
+  if (associator) {
+    options.associate = [associator](SlamFilter& f, const Step&, std::size_t k, std::vector<Observation>& z) {
+      associator->associate(f, k, z);
+    };
+  }
   runLoop(filter, source, steps, observers, options);
+  if (associator) associator->finish(filter);
   if (progress) progress(1.0);
   out.dropped = source.dropped();
   if (steps.droppedBeforeFirstControl() > 0) out.dropped["before_first_control"] += steps.droppedBeforeFirstControl();

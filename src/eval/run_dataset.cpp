@@ -87,6 +87,38 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
   };
   if (request.format == DatasetFormat::Mrclam || r.info.format == "mrclam") j["robot"] = request.dataset_options.robot;
   if (request.smooth) j["smooth"] = true;
+  if (r.association) {
+    const AssociationCounts& a = *r.association;
+    const AssociationOptions& o = request.association;
+    j["association"] = {
+        {"method", associationMethodName(o.method)},
+        {"accept_gate", o.accept},
+        {"new_landmark_gate", o.new_landmark},
+        {"marginal", marginalModeName(o.marginal)},
+        {"confirm", o.confirm},
+        {"window", o.window},
+        {"observations", a.observations},
+        {"scored", a.scored},
+        {"correct", a.correct},
+        {"wrong", a.wrong},
+        {"correct_fraction", a.scored == 0 ? nlohmann::json(nullptr) : nlohmann::json(double(a.correct) / double(a.scored))},
+        {"unlabelled", a.unlabelled},
+        {"unlabelled_matched", a.unlabelled_matched},
+        {"in_removed_landmarks", a.in_removed_landmarks},
+        {"new_landmarks", a.new_landmarks},
+        {"spurious_landmarks", a.spurious_landmarks},
+        {"duplicate_landmarks", a.duplicate_landmarks},
+        {"ambiguous_dropped", a.ambiguous_dropped},
+        {"provisional_removed", a.provisional_removed},
+        {"provisional_final", a.provisional_final},
+        {"merged", a.merged},
+        {"jcbb_truncated", a.jcbb_truncated},
+        {"landmarks_final", a.landmarks_final},
+        {"seconds", a.seconds},
+        {"scoring", "each landmark is labelled with the truth id most of its observations carry (the older of "
+                    "two with one label keeps it); scored: observations with a truth id in a landmark at the end; "
+                    "correct: in the landmark labelled with their truth"}};
+  }
   if (r.smoother) {
     const SmootherReport& b = *r.smoother;
     j["batch"] = {{"init", b.init},
@@ -197,21 +229,36 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
     filter = request.smooth ? makeSmoother(spec, source->info().start_pose, config, request.batch)
                             : makeFilter(spec, source->info().start_pose, config);
   }
+  const bool associating = request.association.method != AssociationMethod::Known;
+  if (associating && (request.checkpoint_every > 0 || !request.resume.empty())) {
+    throw InvalidArgument("checkpoints: a run with --association nn or jcbb has no checkpoint (the associator's "
+                          "provisional landmarks are not saved)");
+  }
+  Associator associator(request.association);
   report.output = runFilter(*filter, *source, progress, request.trajectory_covariances, checkpointing,
-                            resume ? &*resume : nullptr);
+                            resume ? &*resume : nullptr, &associator);
+  if (associating) report.association = associator.counts();
   report.filter = checkpointing.values["filter"];
   report.info = source->info();
   source.reset();
   if (report.output.steps == 0) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
   report.seconds_wall = secondsSince(start);
   report.landmarks = filter->landmarkIds().size();
-  report.errors = evaluateRun(*filter, report.info, report.output);
+  DatasetInfo scored_info = report.info;
+  if (associating) {  // the associator's landmarks against the true landmark each was started from
+    scored_info.landmarks.clear();
+    for (int id : filter->landmarkIds()) {
+      const auto it = report.info.landmarks.find(associator.truthOf(id));
+      if (it != report.info.landmarks.end()) scored_info.landmarks[id] = it->second;
+    }
+  }
+  report.errors = evaluateRun(*filter, scored_info, report.output);
   if (const SmootherReport* b = filter->smootherReport()) report.smoother = *b;
   const SlamFilter* filtered = request.smooth ? smoothedFilter(*filter) : nullptr;
   if (filtered) {
     RunOutput before = report.output;
     before.trajectory = report.output.filter_trajectory;
-    report.filter_errors = evaluateRun(*filtered, report.info, before);
+    report.filter_errors = evaluateRun(*filtered, scored_info, before);
     double sum = 0.0;
     for (int id : filter->landmarkIds()) sum += (filtered->landmark(id) - filter->landmark(id)).squaredNorm();
     if (!filter->landmarkIds().empty()) report.filter_map_distance = std::sqrt(sum / static_cast<double>(filter->landmarkIds().size()));

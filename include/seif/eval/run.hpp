@@ -4,6 +4,7 @@
 // comes either in memory (Dataset: the simulator's worlds) or as a stream of events
 // (EventSource: every reader); StepAssembler (step_assembler.hpp) turns events into filter
 // steps, and the run never holds the observations of more than one step.
+#include <seif/filters/association.hpp>
 #include <seif/filters/slam_filter.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/io/event_source.hpp>
@@ -70,9 +71,12 @@ RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::s
 /// With `resume`, the first resume->steps steps of the source are skipped (the filter is
 /// the checkpoint's) and the outputs continue resume->output: a resumed run ends with the
 /// same outputs, bit for bit, as the run that was never interrupted (timings aside).
+/// With `associator`, it gives the observations their landmark ids before each update
+/// (and its finish() is called after the run).
 RunOutput runFilter(SlamFilter& filter, EventSource& source,
                     const std::function<void(double)>& progress = {}, bool pose_covariances = false,
-                    const RunCheckpointing& checkpointing = {}, const RunResume* resume = nullptr);
+                    const RunCheckpointing& checkpointing = {}, const RunResume* resume = nullptr,
+                    Associator* associator = nullptr);
 
 /// The pose the filter starts from: the ground truth at the first step's time when the
 /// dataset has ground truth, else the origin.

@@ -37,6 +37,9 @@ struct RunRequest {
   /// Run `filter`, then the batch MAP from its estimate (makeSmoother): the outputs are the
   /// smoothed ones, the filter's are written beside them and compared.
   bool smooth = false;
+  /// Data association (filters/association.hpp): known uses the data's ids; nn and jcbb hide
+  /// them from the filter (they only score the association: metrics.json "association").
+  AssociationOptions association;
   bool map_covariances = true;  ///< map.csv with each landmark's exact marginal covariance
   /// trajectory_cov.csv: the pose covariance after every step (SEIF: one factorisation per
   /// step with covariance=exact; O(1) with covariance=local).
@@ -69,6 +72,7 @@ struct RunReport {
   std::optional<SmootherReport> smoother;     ///< a smoother's solve
   std::optional<RunErrors> filter_errors;     ///< with `smooth`: the filter's, before the batch
   std::optional<double> filter_map_distance;  ///< with `smooth`: RMS distance of the filter's map from the batch's [m]
+  std::optional<AssociationCounts> association;  ///< with nn or jcbb: what the association did
   double seconds_wall = 0.0;     ///< open, read and filter
   double seconds_outputs = 0.0;  ///< trajectory, map with covariances, metrics
 };

@@ -1,0 +1,110 @@
+#pragma once
+// Data association: which mapped landmark each observation is of, when the sensor does not
+// say (IJRR 2004 §4; Probabilistic Robotics §12.7; Neira & Tardos 2001). The run loop calls
+// an Associator between predict and update (RunLoopOptions::associate): it gives every
+// observation a landmark id - a mapped one, a new one, or none (dropped) - and keeps the
+// map's provisional landmarks. Strategies: known (the data's ids), nn (individual
+// compatibility, greedy by Mahalanobis distance), jcbb (joint compatibility branch and
+// bound). Candidates come from a grid of landmark means queried around each observation,
+// never from a scan of the map. docs/association.md has the rules and their defaults.
+#include <seif/filters/slam_filter.hpp>
+
+#include <cstddef>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+namespace seif {
+
+enum class AssociationMethod {
+  Known,             ///< the data's landmark ids (today's runs)
+  NearestNeighbour,  ///< "nn": each observation its nearest compatible landmark, greedily
+  Jcbb,              ///< "jcbb": the largest jointly compatible set of pairings
+};
+
+/// "known" | "nn" | "jcbb". Throws InvalidArgument naming the valid names.
+AssociationMethod parseAssociationMethod(std::string_view s);
+std::string_view associationMethodName(AssociationMethod m);
+
+struct AssociationOptions {
+  AssociationMethod method = AssociationMethod::Known;
+  /// Chi-square probability of the accept gate (2 dof): an observation whose Mahalanobis
+  /// distance to a landmark is inside it may be that landmark.
+  double accept = 0.99;
+  /// Chi-square probability of the new-landmark gate: an observation farther than it from
+  /// every landmark starts a new one; between the gates it is dropped as ambiguous.
+  double new_landmark = 0.9999;
+  /// The covariance the gates use (SlamFilter::marginal): Exact, or Local (constant time in
+  /// the SEIF; conditions on the blanket's outside, so it is smaller than the marginal).
+  MarginalMode marginal = MarginalMode::Exact;
+  /// A new landmark stays provisional until it has been seen `confirm` times (its first
+  /// sighting included) within `window` steps of its first; otherwise it is removed exactly
+  /// (SlamFilter::removeLandmark). confirm = 1 keeps every new landmark.
+  int confirm = 3;
+  int window = 100;
+  /// Chi-square probability (2 dof) of the correspondence test: a landmark observed in the
+  /// last scan is merged into an older one nearby (not seen in the same scan) when their
+  /// difference is inside it (SlamFilter::mergeLandmarks). 0: never merge.
+  double merge = 0.95;
+  /// jcbb: most search nodes per scan; when reached, the best hypothesis found so far is
+  /// used and the scan is counted in AssociationCounts::jcbb_truncated.
+  std::size_t jcbb_nodes = 20000;
+  /// The grid of landmark means: the observed landmarks and `refresh` others (in map order,
+  /// cyclically) are re-indexed every step, and queries reach `slack` [m] beyond the
+  /// gate's radius for means that moved since they were indexed.
+  int refresh = 16;
+  double slack = 0.0;  ///< 0: the radius of the new-landmark gate at the first scan
+};
+
+/// What the association did, scored at finish() against Observation::truth where the data
+/// names one. Each landmark is labelled with the truth id most of its observations carry
+/// (an older landmark keeps a label two share); an observation with a truth id in a
+/// landmark at the end is correct when the landmark's label is its truth and the landmark
+/// is not a duplicate.
+struct AssociationCounts {
+  std::size_t observations = 0;       ///< observations the associator saw
+  std::size_t scored = 0;             ///< with a truth id, in a landmark at the end
+  std::size_t correct = 0;            ///< of them, in the landmark labelled with their truth
+  std::size_t wrong = 0;              ///< of them, not
+  std::size_t unlabelled = 0;         ///< without a truth id (clutter, an unmatched detection), in a landmark
+  std::size_t unlabelled_matched = 0;  ///< of them, in a landmark labelled with a truth id
+  std::size_t in_removed_landmarks = 0;  ///< in provisional landmarks removed
+  std::size_t new_landmarks = 0;      ///< landmarks started
+  std::size_t ambiguous_dropped = 0;  ///< between the gates: dropped
+  std::size_t provisional_removed = 0;  ///< provisional landmarks not confirmed in time
+  std::size_t provisional_final = 0;    ///< still provisional at the end (a smoother's map keeps them)
+  std::size_t merged = 0;             ///< landmarks merged into another
+  std::size_t jcbb_truncated = 0;     ///< scans whose search reached jcbb_nodes
+  std::size_t landmarks_final = 0;    ///< landmarks in the map at finish()
+  std::size_t spurious_landmarks = 0;   ///< of them, with no observation that has a truth id
+  std::size_t duplicate_landmarks = 0;  ///< of them, with the label of an older one
+  double seconds = 0.0;               ///< wall time spent associating
+};
+
+class Associator {
+ public:
+  explicit Associator(const AssociationOptions& options);
+  ~Associator();
+  Associator(Associator&&) noexcept;
+  Associator& operator=(Associator&&) noexcept;
+
+  /// Gives each of `observations` (made at step k, after the filter's predict) a landmark
+  /// id, or removes it (dropped as ambiguous); removes the provisional landmarks whose
+  /// window has passed. Known: checks every observation has an id and changes nothing.
+  void associate(SlamFilter& filter, std::size_t k, std::vector<Observation>& observations);
+  /// After the run: removes the landmarks still provisional (not from a smoother) and
+  /// scores the association (landmarks_final, correct, spurious, duplicates, ...).
+  void finish(SlamFilter& filter);
+
+  const AssociationCounts& counts() const;
+  /// Landmark `id`'s label: the truth id most of its observations carried (kUnknownLandmark
+  /// when none had one): to score a map against ground truth.
+  int truthOf(int id) const;
+  const AssociationOptions& options() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace seif

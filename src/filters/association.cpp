@@ -1,0 +1,398 @@
+// The associator (include/seif/filters/association.hpp): candidates from a grid of landmark
+// means, the two gates, a strategy per file (association_nn.cpp, association_jcbb.cpp),
+// provisional landmarks, and the scoring against Observation::truth.
+#include <seif/core/errors.hpp>
+#include <seif/filters/association.hpp>
+#include "filters/association_scan.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace seif {
+
+AssociationMethod parseAssociationMethod(std::string_view s) {
+  if (s == "known") return AssociationMethod::Known;
+  if (s == "nn") return AssociationMethod::NearestNeighbour;
+  if (s == "jcbb") return AssociationMethod::Jcbb;
+  throw InvalidArgument("unknown association '" + std::string(s) + "' (expected known, nn or jcbb)");
+}
+
+std::string_view associationMethodName(AssociationMethod m) {
+  switch (m) {
+    case AssociationMethod::Known: return "known";
+    case AssociationMethod::NearestNeighbour: return "nn";
+    case AssociationMethod::Jcbb: return "jcbb";
+  }
+  return "known";
+}
+
+namespace {
+
+/// A uniform grid of landmark positions: insert, move, remove and a disc query, each
+/// O(landmarks in the cells touched).
+class LandmarkGrid {
+ public:
+  void setCell(double cell) { cell_ = cell; }
+  bool ready() const { return cell_ > 0.0; }
+
+  void put(int id, const Vec2& y) {
+    const auto it = where_.find(id);
+    const std::int64_t key = keyOf(y);
+    if (it != where_.end()) {
+      if (it->second.key == key) {
+        it->second.y = y;
+        return;
+      }
+      erase(it->second.key, id);
+    }
+    cells_[key].push_back(id);
+    where_[id] = {key, y};
+  }
+  void remove(int id) {
+    const auto it = where_.find(id);
+    if (it == where_.end()) return;
+    erase(it->second.key, id);
+    where_.erase(it);
+  }
+  /// Ids indexed within `radius` of `c` (at their indexed positions).
+  void query(const Vec2& c, double radius, std::vector<int>& out) const {
+    out.clear();
+    const auto lo = cellOf(c - Vec2::Constant(radius)), hi = cellOf(c + Vec2::Constant(radius));
+    for (std::int64_t i = lo.first; i <= hi.first; ++i) {
+      for (std::int64_t j = lo.second; j <= hi.second; ++j) {
+        const auto it = cells_.find(pack(i, j));
+        if (it == cells_.end()) continue;
+        for (int id : it->second) {
+          if ((where_.at(id).y - c).squaredNorm() <= radius * radius) out.push_back(id);
+        }
+      }
+    }
+    std::sort(out.begin(), out.end());
+  }
+
+ private:
+  struct Entry {
+    std::int64_t key;
+    Vec2 y;
+  };
+  std::pair<std::int64_t, std::int64_t> cellOf(const Vec2& y) const {
+    return {static_cast<std::int64_t>(std::floor(y.x() / cell_)), static_cast<std::int64_t>(std::floor(y.y() / cell_))};
+  }
+  static std::int64_t pack(std::int64_t i, std::int64_t j) { return (i << 32) ^ (j & 0xffffffff); }
+  std::int64_t keyOf(const Vec2& y) const {
+    const auto [i, j] = cellOf(y);
+    return pack(i, j);
+  }
+  void erase(std::int64_t key, int id) {
+    auto& v = cells_[key];
+    v.erase(std::find(v.begin(), v.end(), id));
+    if (v.empty()) cells_.erase(key);
+  }
+  double cell_ = 0.0;
+  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+  std::unordered_map<int, Entry> where_;
+};
+
+struct Provisional {
+  std::size_t born = 0;
+  int sightings = 1;
+};
+
+}  // namespace
+
+struct Associator::Impl {
+  AssociationOptions options;
+  AssociationCounts counts;
+  double accept_d2 = 0.0, new_d2 = 0.0, merge_d2 = 0.0;
+  LandmarkGrid grid;
+  double slack = 0.0;
+  int next_id = 0;
+  // Per landmark: how many of its observations carried each truth id (kUnknownLandmark
+  // counts those without one). The label of a landmark is its most frequent truth id.
+  std::unordered_map<int, std::unordered_map<int, std::size_t>> seen_truths;
+  std::unordered_map<int, int> label;  // set by finish()
+  std::unordered_map<int, Provisional> provisional;
+  std::vector<int> touched;  // landmarks to re-index at the next scan
+  std::size_t refresh_cursor = 0;
+
+  void forget(int id) {
+    grid.remove(id);
+    provisional.erase(id);
+    const auto it = seen_truths.find(id);
+    if (it != seen_truths.end()) {
+      for (const auto& [truth, n] : it->second) counts.in_removed_landmarks += n;
+      seen_truths.erase(it);
+    }
+  }
+
+  /// The landmark's most frequent truth id (the smaller id on a tie), or kUnknownLandmark.
+  int majority(int id) const {
+    const auto it = seen_truths.find(id);
+    int best = kUnknownLandmark;
+    std::size_t most = 0;
+    if (it == seen_truths.end()) return best;
+    for (const auto& [truth, n] : it->second) {
+      if (truth >= 0 && (n > most || (n == most && truth < best))) {
+        best = truth;
+        most = n;
+      }
+    }
+    return best;
+  }
+
+  void refreshIndex(SlamFilter& filter) {
+    for (int id : touched) {
+      if (filter.hasLandmark(id)) grid.put(id, filter.landmark(id));
+    }
+    mergeDuplicates(filter, touched);
+    touched.clear();
+    const auto& ids = filter.landmarkIds();
+    const std::size_t n = std::min<std::size_t>(ids.size(), static_cast<std::size_t>(std::max(0, options.refresh)));
+    for (std::size_t r = 0; r < n; ++r) {
+      refresh_cursor = (refresh_cursor + 1) % ids.size();
+      grid.put(ids[refresh_cursor], filter.landmark(ids[refresh_cursor]));
+    }
+  }
+
+  /// The correspondence test (IJRR 2004 §4; Probabilistic Robotics §12.7) between landmarks
+  /// a and b: Delta = y_a - y_b with Sigma_Delta = F_Delta Sigma F_Delta^T over their joint
+  /// marginal; their squared Mahalanobis distance.
+  double correspondence(const SlamFilter& filter, int a, int b) const {
+    const int ids[2] = {a, b};
+    const Marginal m = filter.marginal(ids, false, options.marginal);
+    const Vec2 delta = m.mean.head<2>() - m.mean.tail<2>();
+    const Mat2 S = m.covariance.topLeftCorner<2, 2>() + m.covariance.bottomRightCorner<2, 2>() -
+                   m.covariance.topRightCorner<2, 2>() - m.covariance.bottomLeftCorner<2, 2>();
+    const Eigen::LLT<Mat2> llt(0.5 * (S + S.transpose()));
+    if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
+    return delta.dot(llt.solve(delta));
+  }
+
+  /// Merges every landmark observed last scan into an older one nearby that the
+  /// correspondence test cannot tell from it (never two seen in the same scan).
+  void mergeDuplicates(SlamFilter& filter, const std::vector<int>& last_scan) {
+    if (merge_d2 <= 0.0 || !grid.ready()) return;
+    std::vector<int> near;
+    for (int id : last_scan) {
+      if (!filter.hasLandmark(id)) continue;
+      grid.query(filter.landmark(id), slack, near);
+      for (int other : near) {
+        if (other == id || !filter.hasLandmark(other) ||
+            std::find(last_scan.begin(), last_scan.end(), other) != last_scan.end()) {
+          continue;
+        }
+        if (correspondence(filter, id, other) > merge_d2) continue;
+        const int keep = std::min(id, other), drop = std::max(id, other);  // the older stays
+        filter.mergeLandmarks(keep, drop);
+        for (const auto& [truth, n] : seen_truths[drop]) seen_truths[keep][truth] += n;
+        seen_truths.erase(drop);
+        const auto pd = provisional.find(drop);
+        const auto pk = provisional.find(keep);
+        if (pk != provisional.end()) {
+          pk->second.sightings += pd != provisional.end() ? pd->second.sightings : options.confirm;
+          if (pk->second.sightings >= options.confirm) provisional.erase(pk);
+        }
+        forget(drop);
+        grid.put(keep, filter.landmark(keep));
+        ++counts.merged;
+        break;  // `id` may be gone: on to the next
+      }
+    }
+  }
+
+  void expireProvisional(SlamFilter& filter, std::size_t k) {
+    std::vector<int> expired;
+    for (const auto& [id, p] : provisional) {
+      if (k > p.born + static_cast<std::size_t>(options.window)) expired.push_back(id);
+    }
+    std::sort(expired.begin(), expired.end());
+    for (int id : expired) {
+      filter.removeLandmark(id);
+      forget(id);
+      ++counts.provisional_removed;
+    }
+  }
+};
+
+Associator::Associator(const AssociationOptions& options) : impl_(std::make_unique<Impl>()) {
+  const AssociationOptions& o = options;
+  if (!(o.accept > 0.0 && o.accept < 1.0) || !(o.new_landmark >= o.accept && o.new_landmark < 1.0)) {
+    throw InvalidArgument("association: gates need 0 < accept <= new_landmark < 1 (chi-square probabilities)");
+  }
+  if (!(o.merge >= 0.0 && o.merge < 1.0)) throw InvalidArgument("association: merge needs 0 <= merge < 1 (0: never)");
+  if (o.confirm < 1 || o.window < 0 || o.refresh < 0 || !(o.slack >= 0.0) || o.jcbb_nodes < 1) {
+    throw InvalidArgument("association: confirm >= 1, window >= 0, refresh >= 0, slack >= 0 and jcbb_nodes >= 1");
+  }
+  impl_->options = options;
+  impl_->accept_d2 = -2.0 * std::log1p(-o.accept);  // chi-square(2) quantile
+  impl_->new_d2 = -2.0 * std::log1p(-o.new_landmark);
+  impl_->merge_d2 = o.merge > 0.0 ? -2.0 * std::log1p(-o.merge) : 0.0;
+}
+
+Associator::~Associator() = default;
+Associator::Associator(Associator&&) noexcept = default;
+Associator& Associator::operator=(Associator&&) noexcept = default;
+
+const AssociationCounts& Associator::counts() const { return impl_->counts; }
+const AssociationOptions& Associator::options() const { return impl_->options; }
+int Associator::truthOf(int id) const {
+  const auto it = impl_->label.find(id);
+  return it != impl_->label.end() ? it->second : impl_->majority(id);
+}
+
+void Associator::associate(SlamFilter& filter, std::size_t k, std::vector<Observation>& observations) {
+  Impl& s = *impl_;
+  const auto start = std::chrono::steady_clock::now();
+  if (s.options.method == AssociationMethod::Known) {
+    for (std::size_t i = 0; i < observations.size(); ++i) {
+      if (observations[i].landmark == kUnknownLandmark) {
+        throw ModelError("association known: observation " + std::to_string(i) +
+                         " has no landmark id (choose --association nn or jcbb)");
+      }
+    }
+    return;
+  }
+  // The data's ids are hidden from the filter: kept as the truth that scores the association.
+  for (Observation& z : observations) {
+    if (z.truth == kUnknownLandmark) z.truth = z.landmark;
+    z.landmark = kUnknownLandmark;
+  }
+  s.counts.observations += observations.size();
+  s.refreshIndex(filter);
+  s.expireProvisional(filter, k);
+
+  const MeasurementModel& sensor = filter.sensorModel();
+  const Marginal pose = filter.marginal({}, true, s.options.marginal);
+  const Pose2 x = pose.mean.head<3>();
+  // Each observation's world point, and how far from it the new-landmark gate can reach:
+  // sqrt(new_d2 * lambda_max(J_x P J_x^T + J_z R J_z^T)) of the inverse model.
+  std::vector<Vec2> point(observations.size());
+  std::vector<double> radius(observations.size());
+  for (std::size_t i = 0; i < observations.size(); ++i) {
+    Mat23 J_x;
+    Mat2 J_z;
+    point[i] = sensor.inverse(x, observations[i].z, &J_x, &J_z);
+    const Mat2 W = J_x * pose.covariance * J_x.transpose() + J_z * sensor.noise(observations[i]) * J_z.transpose();
+    const double lmax = Eigen::SelfAdjointEigenSolver<Mat2>(0.5 * (W + W.transpose()), Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+    radius[i] = std::sqrt(s.new_d2 * std::max(0.0, lmax));
+    if (!point[i].allFinite() || !std::isfinite(radius[i])) {
+      throw ModelError("association: observation " + std::to_string(i) + " has no finite position in the map");
+    }
+  }
+  if (!s.grid.ready()) {
+    double r0 = 0.0;
+    for (double r : radius) r0 = std::max(r0, r);
+    if (r0 > 0.0) {
+      s.slack = s.options.slack > 0.0 ? s.options.slack : r0;
+      s.grid.setCell(2.0 * r0 + s.slack);
+    }
+  }
+
+  ScanProblem scan;
+  scan.filter = &filter;
+  scan.sensor = &sensor;
+  scan.observations = &observations;
+  scan.accept_d2 = s.accept_d2;
+  scan.accept_probability = s.options.accept;
+  scan.marginal = s.options.marginal;
+  scan.compatible.resize(observations.size());
+  std::vector<double> nearest(observations.size(), std::numeric_limits<double>::infinity());
+  std::vector<int> found;
+  for (std::size_t i = 0; i < observations.size(); ++i) {
+    if (!s.grid.ready()) break;
+    s.grid.query(point[i], radius[i] + s.slack, found);
+    const Mat2 R = sensor.noise(observations[i]);
+    for (int id : found) {
+      const PredictedMeasurement pm = filter.predictMeasurement(id, sensor, R, s.options.marginal);
+      const Vec2 nu = sensor.residual(observations[i].z, pm.z);
+      const Eigen::LLT<Mat2> llt(pm.S);
+      if (llt.info() != Eigen::Success) continue;
+      const double d2 = nu.dot(llt.solve(nu));
+      nearest[i] = std::min(nearest[i], d2);
+      if (d2 <= s.accept_d2) scan.compatible[i].push_back({static_cast<int>(i), id, d2});
+    }
+  }
+  bool truncated = false;
+  const std::vector<int> pairing = s.options.method == AssociationMethod::Jcbb
+                                       ? assignJcbb(scan, s.options.jcbb_nodes, &truncated)
+                                       : assignNearestNeighbour(scan);
+  if (truncated) ++s.counts.jcbb_truncated;
+
+  // Apply: matched, new or dropped (scored against the truth at finish()).
+  std::vector<Observation> kept;
+  kept.reserve(observations.size());
+  for (std::size_t i = 0; i < observations.size(); ++i) {
+    Observation z = observations[i];
+    if (pairing[i] >= 0) {
+      z.landmark = pairing[i];
+      if (const auto p = s.provisional.find(z.landmark); p != s.provisional.end()) {
+        if (++p->second.sightings >= s.options.confirm) s.provisional.erase(p);
+      }
+    } else if (nearest[i] > s.new_d2) {
+      z.landmark = s.next_id++;
+      ++s.counts.new_landmarks;
+      if (s.options.confirm > 1) s.provisional[z.landmark] = Provisional{k, 1};
+    } else {
+      ++s.counts.ambiguous_dropped;
+      continue;
+    }
+    ++s.seen_truths[z.landmark][z.truth < 0 ? kUnknownLandmark : z.truth];
+    s.touched.push_back(z.landmark);
+    kept.push_back(z);
+  }
+  observations = std::move(kept);
+  s.counts.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Associator::finish(SlamFilter& filter) {
+  Impl& s = *impl_;
+  AssociationCounts& c = s.counts;
+  // Landmarks still provisional were not confirmed: the final map holds confirmed ones only
+  // (a smoother, which cannot remove, keeps them and counts them).
+  std::vector<int> unconfirmed;
+  for (const auto& [id, p] : s.provisional) unconfirmed.push_back(id);
+  std::sort(unconfirmed.begin(), unconfirmed.end());
+  c.provisional_final = 0;
+  for (int id : unconfirmed) {
+    if (filter.smoother()) {
+      ++c.provisional_final;
+      continue;
+    }
+    filter.removeLandmark(id);
+    s.forget(id);
+    ++c.provisional_removed;
+  }
+  c.landmarks_final = filter.landmarkIds().size();
+  if (s.options.method == AssociationMethod::Known) return;
+  c.scored = c.correct = c.wrong = c.unlabelled = c.unlabelled_matched = 0;
+  c.spurious_landmarks = c.duplicate_landmarks = 0;
+  s.label.clear();
+  std::unordered_set<int> labelled;
+  for (int id : filter.landmarkIds()) {  // map order: the older landmark keeps a shared label
+    const int label = s.majority(id);
+    const bool duplicate = label >= 0 && !labelled.insert(label).second;
+    s.label[id] = label;
+    if (label < 0) ++c.spurious_landmarks;
+    if (duplicate) ++c.duplicate_landmarks;
+    const auto it = s.seen_truths.find(id);
+    if (it == s.seen_truths.end()) continue;
+    for (const auto& [truth, n] : it->second) {
+      if (truth < 0) {
+        c.unlabelled += n;
+        if (label >= 0) c.unlabelled_matched += n;
+        continue;
+      }
+      c.scored += n;
+      (truth == label && !duplicate ? c.correct : c.wrong) += n;
+    }
+  }
+}
+
+}  // namespace seif

@@ -1,0 +1,182 @@
+// Joint compatibility branch and bound (Neira & Tardos, IEEE T-RA 17(6), 2001): depth first
+// over the observations, each paired with one of its individually compatible landmarks or
+// with none; a pairing is kept only if the joint innovation of the whole hypothesis passes
+// the chi-square(2k) gate - tested at every node, not only at the leaves - and a branch is
+// cut when it cannot pair more observations than the best hypothesis found. The joint
+// innovation covariance S_H = J_H Sigma J_H^T + R_H uses one joint marginal Sigma of the
+// pose and every candidate of the scan; its Cholesky factor grows by one 2x2 block per
+// pairing (O(k^2) per node).
+#include "filters/association_scan.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+namespace seif {
+
+double chiSquareEvenQuantile(double p, int k) {
+  // CDF of chi-square(2k): 1 - exp(-x/2) sum_{i<k} (x/2)^i / i!
+  const auto cdf = [k](double x) {
+    const double h = 0.5 * x;
+    double term = 1.0, sum = 1.0;
+    for (int i = 1; i < k; ++i) {
+      term *= h / i;
+      sum += term;
+    }
+    return 1.0 - std::exp(-h) * sum;
+  };
+  double lo = 0.0, hi = 2.0 * k + 10.0;
+  while (cdf(hi) < p) hi *= 2.0;
+  for (int it = 0; it < 200 && hi - lo > 1e-12 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (cdf(mid) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+namespace {
+
+/// One candidate pairing with what the joint test needs: its innovation, noise, Jacobian
+/// columns, and A = J Sigma (2 x dim of the joint marginal).
+struct Candidate {
+  Pairing pairing;
+  Eigen::Index column = 0;  // first column of its landmark in the joint marginal
+  Vec2 nu = Vec2::Zero();
+  Mat2 R = Mat2::Zero();
+  Mat23 J_x = Mat23::Zero();
+  Mat2 J_y = Mat2::Zero();
+  Eigen::MatrixXd A;
+};
+
+class Search {
+ public:
+  Search(const ScanProblem& scan, std::size_t max_nodes) : max_nodes_(max_nodes) {
+    const std::size_t m = scan.compatible.size();
+    std::vector<int> ids;
+    std::unordered_map<int, Eigen::Index> column;
+    for (const auto& list : scan.compatible) {
+      for (const Pairing& p : list) {
+        if (column.emplace(p.landmark, 3 + 2 * static_cast<Eigen::Index>(ids.size())).second) ids.push_back(p.landmark);
+      }
+    }
+    candidates_.resize(m);
+    if (ids.empty()) return;
+    const Marginal joint = scan.filter->marginal(ids, true, scan.marginal);
+    const Pose2 x = joint.mean.head<3>();
+    for (std::size_t i = 0; i < m; ++i) {
+      for (const Pairing& p : scan.compatible[i]) {
+        Candidate c;
+        c.pairing = p;
+        c.column = column.at(p.landmark);
+        const Observation& z = (*scan.observations)[static_cast<std::size_t>(p.observation)];
+        const Vec2 zhat = scan.sensor->predict(x, joint.mean.segment<2>(c.column), &c.J_x, &c.J_y);
+        c.nu = scan.sensor->residual(z.z, zhat);
+        c.R = scan.sensor->noise(z);
+        c.A = c.J_x * joint.covariance.topRows<3>() + c.J_y * joint.covariance.middleRows<2>(c.column);
+        candidates_[i].push_back(std::move(c));
+      }
+      std::sort(candidates_[i].begin(), candidates_[i].end(),
+                [](const Candidate& a, const Candidate& b) { return a.pairing.d2 < b.pairing.d2; });
+    }
+    gates_.resize(m + 1);
+    for (std::size_t k = 1; k <= m; ++k) gates_[k] = chiSquareEvenQuantile(scan.accept_probability, static_cast<int>(k));
+  }
+
+  std::vector<int> run(bool* truncated) {
+    const std::size_t m = candidates_.size();
+    chosen_.assign(m, nullptr);
+    best_.assign(m, -1);
+    L_ = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(m), 2 * static_cast<Eigen::Index>(m));
+    y_ = Eigen::VectorXd::Zero(2 * static_cast<Eigen::Index>(m));
+    recurse(0, 0, 0.0);
+    if (truncated) *truncated = nodes_ >= max_nodes_;
+    return best_;
+  }
+
+ private:
+  // Depth-first over observation i with k pairings so far (their factor in L_, y_) and
+  // joint distance d2.
+  void recurse(std::size_t i, int k, double d2) {
+    if (++nodes_ > max_nodes_) return;
+    const std::size_t m = candidates_.size();
+    if (i == m) {
+      if (k > best_pairings_ || (k == best_pairings_ && d2 < best_d2_)) {
+        best_pairings_ = k;
+        best_d2_ = d2;
+        for (std::size_t o = 0; o < m; ++o) best_[o] = chosen_[o] ? chosen_[o]->pairing.landmark : -1;
+      }
+      return;
+    }
+    for (const Candidate& c : candidates_[i]) {
+      if (used(c.pairing.landmark, i)) continue;
+      double d2_new;
+      if (!extend(c, k, d2, &d2_new)) continue;
+      chosen_[i] = &c;
+      recurse(i + 1, k + 1, d2_new);
+      chosen_[i] = nullptr;
+      if (nodes_ > max_nodes_) return;
+    }
+    // Leave observation i unpaired only if the rest could still beat the best.
+    if (k + static_cast<int>(m - i - 1) > best_pairings_) recurse(i + 1, k, d2);
+  }
+
+  bool used(int landmark, std::size_t i) const {
+    for (std::size_t o = 0; o < i; ++o) {
+      if (chosen_[o] && chosen_[o]->pairing.landmark == landmark) return true;
+    }
+    return false;
+  }
+
+  /// Appends c's block to the factor of S_H (rows 2k, 2k+1) and returns whether the joint
+  /// distance d2 + |y_new|^2 passes the chi-square(2(k+1)) gate.
+  bool extend(const Candidate& c, int k, double d2, double* d2_new) {
+    const Eigen::Index r = 2 * static_cast<Eigen::Index>(k);
+    // C = J_c Sigma J_H^T, one 2x2 block per pairing already in H, in the order of L_.
+    Eigen::MatrixXd C(2, r);
+    Eigen::VectorXd nu_h(r);
+    Eigen::Index col = 0;
+    for (const Candidate* p : chosen_) {
+      if (!p) continue;
+      C.middleCols<2>(col) = c.A.leftCols<3>() * p->J_x.transpose() + c.A.middleCols<2>(p->column) * p->J_y.transpose();
+      col += 2;
+    }
+    Mat2 D = c.A.leftCols<3>() * c.J_x.transpose() + c.A.middleCols<2>(c.column) * c.J_y.transpose() + c.R;
+    Eigen::Matrix<double, 2, Eigen::Dynamic> L21(2, r);
+    if (r > 0) {
+      L21 = L_.topLeftCorner(r, r).triangularView<Eigen::Lower>().solve(C.transpose()).transpose();
+      D -= L21 * L21.transpose();
+    }
+    Eigen::LLT<Mat2> llt(0.5 * (D + D.transpose()));
+    if (llt.info() != Eigen::Success) return false;
+    Vec2 rhs = c.nu;
+    if (r > 0) rhs -= L21 * y_.head(r);
+    const Vec2 y = llt.matrixL().solve(rhs);
+    *d2_new = d2 + y.squaredNorm();
+    if (!(*d2_new <= gates_[static_cast<std::size_t>(k + 1)])) return false;
+    if (r > 0) L_.block(r, 0, 2, r) = L21;
+    L_.block<2, 2>(r, r) = llt.matrixL();
+    y_.segment<2>(r) = y;
+    return true;
+  }
+
+  std::size_t max_nodes_;
+  std::vector<std::vector<Candidate>> candidates_;
+  std::vector<double> gates_;
+  std::vector<const Candidate*> chosen_;
+  std::vector<int> best_;
+  int best_pairings_ = -1;
+  double best_d2_ = 0.0;
+  std::size_t nodes_ = 0;
+  Eigen::MatrixXd L_;
+  Eigen::VectorXd y_;
+};
+
+}  // namespace
+
+std::vector<int> assignJcbb(const ScanProblem& scan, std::size_t max_nodes, bool* truncated) {
+  Search search(scan, max_nodes);
+  return search.run(truncated);
+}
+
+}  // namespace seif

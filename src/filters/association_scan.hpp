@@ -1,0 +1,39 @@
+#pragma once
+// One scan's association problem, as the strategies see it (association_nn.cpp,
+// association_jcbb.cpp): each observation's individually compatible landmarks with their
+// Mahalanobis distances, and for JCBB the joint marginal of the pose and every candidate.
+#include <seif/filters/slam_filter.hpp>
+
+#include <cstddef>
+#include <vector>
+
+namespace seif {
+
+struct Pairing {
+  int observation = -1;  ///< index into the scan's observations
+  int landmark = -1;     ///< landmark id
+  double d2 = 0.0;       ///< squared Mahalanobis distance of the innovation
+};
+
+struct ScanProblem {
+  const SlamFilter* filter = nullptr;
+  const MeasurementModel* sensor = nullptr;
+  const std::vector<Observation>* observations = nullptr;
+  std::vector<std::vector<Pairing>> compatible;  ///< per observation, inside the accept gate
+  double accept_d2 = 0.0;                        ///< the accept gate (2 dof)
+  double accept_probability = 0.99;              ///< for the joint gate's chi-square(2k)
+  MarginalMode marginal = MarginalMode::Exact;
+};
+
+/// Per observation: the landmark id it is paired with, or -1.
+/// nn: pairings inside the gate taken greedily by distance, each landmark at most once.
+std::vector<int> assignNearestNeighbour(const ScanProblem& scan);
+/// jcbb: the hypothesis with the most pairings (ties: the smallest joint distance) whose
+/// joint innovation passes the chi-square(2k) gate, searched depth first at most
+/// `max_nodes` nodes (*truncated set when the bound stopped it).
+std::vector<int> assignJcbb(const ScanProblem& scan, std::size_t max_nodes, bool* truncated);
+
+/// The p-quantile of chi-square with 2k degrees of freedom (closed-form CDF, bisection).
+double chiSquareEvenQuantile(double p, int k);
+
+}  // namespace seif
