@@ -88,8 +88,8 @@ NullspaceResidual nullspaceResidual(Linearization policy) {
       const Vec2 m_first = fe.landmark(slot);
       Mat23 J_x;
       Mat2 J_y;
-      const bool fej = policy == Linearization::FirstEstimates;
-      sensor.predict(x, fej ? m_first : ekf.landmark(z.landmark), &J_x, &J_y);
+      const bool first = policy == Linearization::FirstEstimates;
+      sensor.predict(x, first ? m_first : ekf.landmark(z.landmark), &J_x, &J_y);
       // the OC-EKF: the newest estimates' Jacobian, projected (what PlannedObservation::constrain does)
       if (policy == Linearization::ObservabilityConstrained) {
         ObservabilityConstraint{fe.predictedPosition(), m_first}.apply(J_x, J_y);

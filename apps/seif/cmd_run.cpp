@@ -231,11 +231,11 @@ void addRunCommand(CLI::App& app) {
       ->check(CLI::IsMember({"exact", "local"}))
       ->capture_default_str();
   cmd->add_option("--confirm", args->assoc.confirm,
-                  "a new landmark is provisional until seen this many times within --window steps;\n"
+                  "a new landmark is provisional until seen this many times within --window scans;\n"
                   "otherwise it is removed exactly (1: keep every new landmark)")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
-  cmd->add_option("--window", args->assoc.window, "steps a provisional landmark has to be confirmed")
+  cmd->add_option("--window", args->assoc.window, "scans (steps with observations) a provisional landmark has to be confirmed in")
       ->check(CLI::Range(0, 1000000000))
       ->capture_default_str();
   cmd->add_option("--jcbb-nodes", args->assoc.jcbb_nodes,

@@ -101,7 +101,7 @@ class LandmarkGrid {
 };
 
 struct Provisional {
-  std::size_t born = 0;
+  std::size_t born = 0;  // the scan (Impl::scans) that started it
   int sightings = 1;
 };
 
@@ -121,6 +121,7 @@ struct Associator::Impl {
   std::unordered_map<int, Provisional> provisional;
   std::vector<int> touched;  // landmarks to re-index at the next scan
   std::size_t refresh_cursor = 0;
+  std::size_t scans = 0;  // steps with observations so far
 
   void forget(int id) {
     grid.remove(id);
@@ -207,10 +208,10 @@ struct Associator::Impl {
     }
   }
 
-  void expireProvisional(SlamFilter& filter, std::size_t k) {
+  void expireProvisional(SlamFilter& filter, std::size_t scan) {
     std::vector<int> expired;
     for (const auto& [id, p] : provisional) {
-      if (k > p.born + static_cast<std::size_t>(options.window)) expired.push_back(id);
+      if (scan > p.born + static_cast<std::size_t>(options.window)) expired.push_back(id);
     }
     std::sort(expired.begin(), expired.end());
     for (int id : expired) {
@@ -247,7 +248,7 @@ int Associator::truthOf(int id) const {
   return it != impl_->label.end() ? it->second : impl_->majority(id);
 }
 
-void Associator::associate(SlamFilter& filter, std::size_t k, std::vector<Observation>& observations) {
+void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Observation>& observations) {
   Impl& s = *impl_;
   const auto start = std::chrono::steady_clock::now();
   if (s.options.method == AssociationMethod::Known) {
@@ -266,7 +267,9 @@ void Associator::associate(SlamFilter& filter, std::size_t k, std::vector<Observ
   }
   s.counts.observations += observations.size();
   s.refreshIndex(filter);
-  s.expireProvisional(filter, k);
+  if (observations.empty()) return;  // a step without a scan: nothing to associate, no scan counted
+  ++s.scans;
+  s.expireProvisional(filter, s.scans);
 
   const MeasurementModel& sensor = filter.sensorModel();
   const Marginal pose = filter.marginal({}, true, s.options.marginal);
@@ -318,6 +321,13 @@ void Associator::associate(SlamFilter& filter, std::size_t k, std::vector<Observ
       nearest[i] = std::min(nearest[i], d2);
       if (d2 <= s.accept_d2) scan.compatible[i].push_back({static_cast<int>(i), id, d2});
     }
+    // The provisional list is a second resort (Probabilistic Robotics §12.7): an observation
+    // compatible with a confirmed landmark is not offered the provisional ones.
+    auto& c = scan.compatible[i];
+    const auto provisional = [&](const Pairing& p) { return s.provisional.count(p.landmark) > 0; };
+    if (std::any_of(c.begin(), c.end(), [&](const Pairing& p) { return !provisional(p); })) {
+      c.erase(std::remove_if(c.begin(), c.end(), provisional), c.end());
+    }
   }
   bool truncated = false;
   const std::vector<int> pairing = s.options.method == AssociationMethod::Jcbb
@@ -338,7 +348,7 @@ void Associator::associate(SlamFilter& filter, std::size_t k, std::vector<Observ
     } else if (nearest[i] > s.new_d2) {
       z.landmark = s.next_id++;
       ++s.counts.new_landmarks;
-      if (s.options.confirm > 1) s.provisional[z.landmark] = Provisional{k, 1};
+      if (s.options.confirm > 1) s.provisional[z.landmark] = Provisional{s.scans, 1};
     } else {
       ++s.counts.ambiguous_dropped;
       continue;

@@ -196,6 +196,9 @@ void SeifSlam::reanchorIfMoved(int slot) {
 
 void SeifSlam::removeLandmark(int id) {
   const int slot = book_.require(id);
+  // An active landmark is deactivated first: marginalised while linked to the robot, it
+  // would link the robot to all its neighbours (more than a local block holds, on a dense map).
+  if (store_.node(slot).active >= 0) deactivateSurplus(false, slot);
   store_.marginalizeLandmark(slot);
   book_.removeSlot(slot);
   invalidateFactor();

@@ -111,7 +111,8 @@ class SeifSlam final : public SlamFilter {
   Eigen::MatrixXd localCovariance(std::span<const int> vars) const;
   Eigen::MatrixXd localCovariance(std::initializer_list<int> vars) const;
   /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).
-  void deactivateSurplus(bool solve_active_mean_first);
+  /// With `slot` >= 0 (an active landmark), deactivates that landmark alone.
+  void deactivateSurplus(bool solve_active_mean_first, int slot = -1);
   /// update() with Sparsify::Eseif (Walter, Eustice, Leonard 2007).
   void eseifUpdate(std::span<const Observation> z, const MeasurementModel& sensor);
   /// Whether z would leave more than options.active landmarks active.

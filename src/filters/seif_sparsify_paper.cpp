@@ -9,10 +9,10 @@ namespace seif {
 
 void SeifSlam::sparsify() { deactivateSurplus(false); }
 
-void SeifSlam::deactivateSurplus(bool solve_active_mean_first) {
+void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
   // §4, paper eq. (44-51): deactivate the surplus Y0, keep Y+.
   const int k = static_cast<int>(store_.robotLinks().size());
-  const int drop = k - options_.active;
+  const int drop = slot >= 0 ? 1 : k - options_.active;
   if (drop <= 0) return;
   ++sparsifications_;
   if (options_.sparsify == SeifOptions::Sparsify::Eseif) ++eseif_fallbacks_;
@@ -26,6 +26,7 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first) {
       const Vec2 dl = store_.node(l.slot).H.diagonal().cwiseSqrt().cwiseInverse();
       score = (dx.asDiagonal() * l.H * dl.asDiagonal()).norm();
     }
+    if (slot >= 0) score = l.slot == slot ? -1.0 : 1.0;  // `slot` alone is deactivated
     ranking_.emplace_back(score, l.slot);
   }
   std::sort(ranking_.begin(), ranking_.end());  // weakest (or oldest) first

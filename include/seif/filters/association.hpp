@@ -38,10 +38,11 @@ struct AssociationOptions {
   /// the SEIF; conditions on the blanket's outside, so it is smaller than the marginal).
   MarginalMode marginal = MarginalMode::Exact;
   /// A new landmark stays provisional until it has been seen `confirm` times (its first
-  /// sighting included) within `window` steps of its first; otherwise it is removed exactly
-  /// (SlamFilter::removeLandmark). confirm = 1 keeps every new landmark.
-  int confirm = 3;
-  int window = 100;
+  /// sighting included) within `window` scans (steps with observations) of its first;
+  /// otherwise it is removed exactly (SlamFilter::removeLandmark). confirm = 1 keeps every
+  /// new landmark. Chosen on the park with one false detection per scan (docs/association.md).
+  int confirm = 4;
+  int window = 20;
   /// Chi-square probability (2 dof) of the correspondence test: a landmark observed in the
   /// last scan is merged into an older one nearby (not seen in the same scan) when their
   /// difference is inside it (SlamFilter::mergeLandmarks). 0: never merge.

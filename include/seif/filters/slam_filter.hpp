@@ -182,7 +182,9 @@ class SlamFilter {
   /// Takes landmark `id` out of the map exactly: the posterior's marginal over everything
   /// else (EKF: its rows and columns deleted; information form: the Schur complement over it,
   /// which links its neighbours). The landmark in the last slot takes its place in
-  /// landmarkIds(). Throws UnknownLandmark. The batch MAP does not remove (InvalidArgument).
+  /// landmarkIds(). The SEIF first deactivates the landmark when it is active (the paper's
+  /// sparsification of its robot link), so the robot does not inherit all its neighbours.
+  /// Throws UnknownLandmark. The batch MAP does not remove (InvalidArgument).
   virtual void removeLandmark(int id) = 0;
   /// Merges landmark `drop` into `keep` when both turn out to be one landmark: the posterior
   /// conditioned on y_keep = y_drop (information form: H' = T^T H T, b' = T^T b, drop's rows
