@@ -86,6 +86,7 @@ void bindRun(py::module_& m) {
       .def_readwrite("seif", &RunRequest::seif, "SeifOptions (spec options override them)")
       .def_readwrite("batch", &RunRequest::batch, "BatchOptions of the batch and of smooth (spec options override them)")
       .def_readwrite("smooth", &RunRequest::smooth, "run the filter, then the batch MAP from its estimate")
+      .def_readwrite("association", &RunRequest::association, "AssociationOptions (method known: the data's ids)")
       .def_readwrite("linearization", &RunRequest::linearization, "default linearization (the spec's overrides it)")
       .def_readwrite("iterations", &RunRequest::iterations, "default iterations (the spec's overrides it)")
       .def_readwrite("map_covariances", &RunRequest::map_covariances)
@@ -102,6 +103,7 @@ void bindRun(py::module_& m) {
       .def_readonly("errors", &RunReport::errors)
       .def_readonly("landmarks", &RunReport::landmarks)
       .def_readonly("smoother", &RunReport::smoother, "SmootherReport of a batch or smooth run, else None")
+      .def_readonly("association", &RunReport::association, "AssociationCounts of an nn or jcbb run, else None")
       .def_readonly("filter_errors", &RunReport::filter_errors, "smooth: the filter's errors before the batch")
       .def_readonly("filter_map_distance", &RunReport::filter_map_distance,
                     "smooth: RMS distance of the filter's map from the batch's [m]")

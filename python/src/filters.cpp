@@ -5,6 +5,7 @@
 #include "filters/batch_map.hpp"
 #include "filters/eif_slam.hpp"
 #include "filters/ekf_slam.hpp"
+#include <seif/filters/association.hpp>
 #include <seif/filters/factory.hpp>
 #include "filters/seif_slam.hpp"
 #include <seif/filters/slam_filter.hpp>
@@ -376,11 +377,73 @@ void bindSlamFilter(py::module_& m) {
 
 }  // namespace
 
+void bindAssociation(py::module_& m) {
+  bindNamedEnum<AssociationMethod>(m, "AssociationMethod", "'known' | 'nn' | 'jcbb' (filters/association.hpp)",
+                                   &parseAssociationMethod, &associationMethodName)
+      .value("Known", AssociationMethod::Known)
+      .value("NearestNeighbour", AssociationMethod::NearestNeighbour)
+      .value("Jcbb", AssociationMethod::Jcbb);
+  py::class_<AssociationOptions>(m, "AssociationOptions",
+                                 "Data association's options (filters/association.hpp; `seif run --association`)")
+      .def(py::init<>())
+      .def_readwrite("method", &AssociationOptions::method)
+      .def_readwrite("accept", &AssociationOptions::accept, "chi-square probability of the accept gate")
+      .def_readwrite("new_landmark", &AssociationOptions::new_landmark, "chi-square probability of the new-landmark gate")
+      .def_readwrite("marginal", &AssociationOptions::marginal, "MarginalMode the gates use")
+      .def_readwrite("confirm", &AssociationOptions::confirm, "sightings that confirm a provisional landmark")
+      .def_readwrite("window", &AssociationOptions::window, "scans it has to be confirmed in")
+      .def_readwrite("merge", &AssociationOptions::merge, "chi-square probability of the correspondence test (0: never)")
+      .def_readwrite("jcbb_nodes", &AssociationOptions::jcbb_nodes)
+      .def_readwrite("refresh", &AssociationOptions::refresh)
+      .def_readwrite("slack", &AssociationOptions::slack)
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"method", "accept", "new_landmark", "marginal", "confirm", "window", "merge"});
+      });
+  py::class_<AssociationCounts>(m, "AssociationCounts", "What an association did, scored against Observation.truth")
+      .def_readonly("observations", &AssociationCounts::observations)
+      .def_readonly("scored", &AssociationCounts::scored)
+      .def_readonly("correct", &AssociationCounts::correct)
+      .def_readonly("wrong", &AssociationCounts::wrong)
+      .def_readonly("unlabelled", &AssociationCounts::unlabelled)
+      .def_readonly("unlabelled_matched", &AssociationCounts::unlabelled_matched)
+      .def_readonly("in_removed_landmarks", &AssociationCounts::in_removed_landmarks)
+      .def_readonly("new_landmarks", &AssociationCounts::new_landmarks)
+      .def_readonly("ambiguous_dropped", &AssociationCounts::ambiguous_dropped)
+      .def_readonly("provisional_removed", &AssociationCounts::provisional_removed)
+      .def_readonly("provisional_final", &AssociationCounts::provisional_final)
+      .def_readonly("merged", &AssociationCounts::merged)
+      .def_readonly("jcbb_truncated", &AssociationCounts::jcbb_truncated)
+      .def_readonly("landmarks_final", &AssociationCounts::landmarks_final)
+      .def_readonly("spurious_landmarks", &AssociationCounts::spurious_landmarks)
+      .def_readonly("duplicate_landmarks", &AssociationCounts::duplicate_landmarks)
+      .def_readonly("seconds", &AssociationCounts::seconds)
+      .def("__repr__", [](py::handle s) {
+        return reprOf(s, {"observations", "scored", "correct", "wrong", "new_landmarks", "landmarks_final",
+                          "spurious_landmarks", "duplicate_landmarks"});
+      });
+  py::class_<Associator>(m, "Associator",
+                         "Gives observations their landmark ids before an update (run_loop's associate hook)")
+      .def(py::init<const AssociationOptions&>(), py::arg("options"))
+      .def(
+          "associate",
+          [](Associator& a, SlamFilter& f, std::size_t k, std::vector<Observation> z) {
+            a.associate(f, k, z);
+            return z;
+          },
+          py::arg("filter"), py::arg("k"), py::arg("observations"),
+          "The observations with their landmark ids (ambiguous ones left out); may remove provisional landmarks")
+      .def("finish", &Associator::finish, py::arg("filter"))
+      .def("truth_of", &Associator::truthOf, py::arg("id"))
+      .def_property_readonly("counts", &Associator::counts)
+      .def_property_readonly("options", &Associator::options);
+}
+
 void bindFilters(py::module_& m) {
   bindSeifOptions(m);
   bindBatchOptions(m);
   bindConfig(m);
   bindSlamFilter(m);
+  bindAssociation(m);
 }
 
 }  // namespace seif::python

@@ -44,12 +44,12 @@ void bindRunLoop(py::module_& m) {
   m.def(
       "run_loop",
       [](SlamFilter& filter, const Dataset& data, const std::vector<RunObserver*>& observers, std::size_t start_step,
-         const std::function<std::vector<Observation>(const SlamFilter&, const Step&, std::size_t,
+         const std::function<std::vector<Observation>(SlamFilter&, const Step&, std::size_t,
                                                       std::vector<Observation>)>& associate) {
         RunLoopOptions options;
         options.start_step = start_step;
         if (associate) {
-          options.associate = [&](const SlamFilter& f, const Step& step, std::size_t k, std::vector<Observation>& z) {
+          options.associate = [&](SlamFilter& f, const Step& step, std::size_t k, std::vector<Observation>& z) {
             z = associate(f, step, k, z);
           };
         }

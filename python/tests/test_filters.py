@@ -216,3 +216,23 @@ def test_batch_options_and_report(paper_world):
     smoother.finish()
     assert smoother.smoother_report.init == "ekf"
     assert smoother.smoother_report.final_cost == pytest.approx(costs["ekf"], rel=1e-9)
+
+
+@pytest.mark.parametrize("method", ["nn", "jcbb"])
+def test_association_from_python_equals_the_cpp_run(tmp_path, method):
+    """An Associator driven from Python through run_loop's associate hook, on the park with
+    clutter and missed detections: scored against the simulator's truth."""
+    data, world = seif.simulated_dataset("park", seed=2, steps=400, clutter=0.5, detection_probability=0.9)
+    config = paper_config(world)
+    options = seif.AssociationOptions()
+    options.method = method
+    associator = seif.Associator(options)
+    f = seif.make_filter("ekf", seif.start_pose(data), config)
+    seif.run_loop(f, data, associate=lambda filt, step, k, z: associator.associate(filt, k, z))
+    associator.finish(f)
+    counts = associator.counts
+    assert counts.scored > 1000
+    assert counts.correct / counts.scored > 0.98
+    assert counts.landmarks_final == len(f.landmark_ids())
+    truths = {associator.truth_of(i) for i in f.landmark_ids()}
+    assert all(t >= 6 for t in truths), "every landmark labelled with a tree of the world"

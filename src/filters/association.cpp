@@ -33,6 +33,18 @@ std::string_view associationMethodName(AssociationMethod m) {
   return "known";
 }
 
+double correspondenceDistance(const SlamFilter& filter, int a, int b, MarginalMode mode) {
+  const int ids[2] = {a, b};
+  const Marginal m = filter.marginal(ids, false, mode);
+  const Vec2 delta = m.mean.head<2>() - m.mean.tail<2>();
+  // F_Delta = [I, -I]: Sigma_aa + Sigma_bb - Sigma_ab - Sigma_ba
+  const Mat2 S = m.covariance.topLeftCorner<2, 2>() + m.covariance.bottomRightCorner<2, 2>() -
+                 m.covariance.topRightCorner<2, 2>() - m.covariance.bottomLeftCorner<2, 2>();
+  const Eigen::LLT<Mat2> llt(0.5 * (S + S.transpose()));
+  if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
+  return delta.dot(llt.solve(delta));
+}
+
 namespace {
 
 /// A uniform grid of landmark positions: insert, move, remove and a disc query, each
@@ -162,20 +174,6 @@ struct Associator::Impl {
     }
   }
 
-  /// The correspondence test (IJRR 2004 §4; Probabilistic Robotics §12.7) between landmarks
-  /// a and b: Delta = y_a - y_b with Sigma_Delta = F_Delta Sigma F_Delta^T over their joint
-  /// marginal; their squared Mahalanobis distance.
-  double correspondence(const SlamFilter& filter, int a, int b) const {
-    const int ids[2] = {a, b};
-    const Marginal m = filter.marginal(ids, false, options.marginal);
-    const Vec2 delta = m.mean.head<2>() - m.mean.tail<2>();
-    const Mat2 S = m.covariance.topLeftCorner<2, 2>() + m.covariance.bottomRightCorner<2, 2>() -
-                   m.covariance.topRightCorner<2, 2>() - m.covariance.bottomLeftCorner<2, 2>();
-    const Eigen::LLT<Mat2> llt(0.5 * (S + S.transpose()));
-    if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
-    return delta.dot(llt.solve(delta));
-  }
-
   /// Merges every landmark observed last scan into an older one nearby that the
   /// correspondence test cannot tell from it (never two seen in the same scan).
   void mergeDuplicates(SlamFilter& filter, const std::vector<int>& last_scan) {
@@ -189,7 +187,7 @@ struct Associator::Impl {
             std::find(last_scan.begin(), last_scan.end(), other) != last_scan.end()) {
           continue;
         }
-        if (correspondence(filter, id, other) > merge_d2) continue;
+        if (correspondenceDistance(filter, id, other, options.marginal) > merge_d2) continue;
         const int keep = std::min(id, other), drop = std::max(id, other);  // the older stays
         filter.mergeLandmarks(keep, drop);
         for (const auto& [truth, n] : seen_truths[drop]) seen_truths[keep][truth] += n;

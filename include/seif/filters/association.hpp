@@ -82,6 +82,12 @@ struct AssociationCounts {
   double seconds = 0.0;               ///< wall time spent associating
 };
 
+/// The correspondence test (IJRR 2004 §4; Probabilistic Robotics §12.7): the squared
+/// Mahalanobis distance of Delta = y_a - y_b, Sigma_Delta = F_Delta Sigma F_Delta^T over the
+/// joint marginal of landmarks a and b (SlamFilter::marginal with `mode`). Small: they may be
+/// one landmark (SlamFilter::mergeLandmarks). Infinity when Sigma_Delta is singular.
+double correspondenceDistance(const SlamFilter& filter, int a, int b, MarginalMode mode = MarginalMode::Exact);
+
 class Associator {
  public:
   explicit Associator(const AssociationOptions& options);
