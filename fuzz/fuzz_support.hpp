@@ -64,7 +64,8 @@ inline std::string brokenInvariant(const RobotLog& log) {
     const MeasurementRecord& m = log.measurements[i];
     if (!std::isfinite(m.time) || !std::isfinite(m.bearing)) return "non-finite measurement";
     if (!(m.range > 0.0) || !std::isfinite(m.range)) return "range not finite and > 0";
-    if (m.subject <= 5) return "measurement of a robot kept";
+    // a robot's subject is never kept; kClutterSubject (0) is a false detection, kept
+    if (m.subject <= 5 && m.subject != kClutterSubject) return "measurement of a robot kept";
     if (i > 0 && m.time < log.measurements[i - 1].time) return "measurement time goes backwards";
   }
   for (std::size_t i = 0; i < log.groundtruth.size(); ++i) {
