@@ -230,9 +230,10 @@ Associator::Associator(const AssociationOptions& options) : impl_(std::make_uniq
     throw InvalidArgument("association: confirm >= 1, window >= 0, refresh >= 0, slack >= 0 and jcbb_nodes >= 1");
   }
   impl_->options = options;
-  impl_->accept_d2 = -2.0 * std::log1p(-o.accept);  // chi-square(2) quantile
-  impl_->new_d2 = -2.0 * std::log1p(-o.new_landmark);
-  impl_->merge_d2 = o.merge > 0.0 ? -2.0 * std::log1p(-o.merge) : 0.0;
+  const auto chi2 = [](double p) { return -2.0 * std::log1p(-p); };  // chi-square(2) quantile, closed form
+  impl_->accept_d2 = chi2(o.accept);
+  impl_->new_d2 = chi2(o.new_landmark);
+  impl_->merge_d2 = o.merge > 0.0 ? chi2(o.merge) : 0.0;
 }
 
 Associator::~Associator() = default;

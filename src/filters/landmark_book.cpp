@@ -111,11 +111,6 @@ MotionIncrement LandmarkBook::motionIncrement(const MotionIncrement& m, const Ve
   return fej_ ? fej_->fejIncrement(m, position) : m;
 }
 
-std::optional<Vec2> LandmarkBook::jacobianLandmark(int slot) const {
-  if (linearization_ != Linearization::FirstEstimates) return std::nullopt;
-  return fej_->landmark(slot);
-}
-
 LandmarkBook::Mark LandmarkBook::mark() const {
   return {size(), fej_ ? fej_->predictedPosition() : Vec2::Zero(), gate_.rejected()};
 }

@@ -104,8 +104,6 @@ class LandmarkBook {
   /// pose predictions (FirstEstimates::fejIncrement); else `m` itself. `position` is the
   /// robot position the increment was linearised at.
   MotionIncrement motionIncrement(const MotionIncrement& m, const Vec2& position);
-  /// Where the Jacobians of slot `slot` are evaluated: nullopt at the current mean.
-  std::optional<Vec2> jacobianLandmark(int slot) const;
 
   // ---- removal and merge (each filter applies the same change to its own form)
   /// Removes slot `slot`; the last slot takes its place (the filter moves its rows likewise).

@@ -15,18 +15,19 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
   const int drop = slot >= 0 ? 1 : k - options_.active;
   if (drop <= 0) return;
   ++sparsifications_;
-  if (options_.sparsify == SeifOptions::Sparsify::Eseif) ++eseif_fallbacks_;
+  if (options_.sparsify == SeifOptions::Sparsify::Eseif && slot < 0) ++eseif_fallbacks_;
   ranking_.clear();
   for (const SeifStore::RobotLink& l : store_.robotLinks()) {
     double score;
-    if (options_.deactivate == SeifOptions::Deactivate::Oldest) {
+    if (slot >= 0) {
+      score = l.slot == slot ? 0.0 : 1.0;  // `slot` alone is deactivated
+    } else if (options_.deactivate == SeifOptions::Deactivate::Oldest) {
       score = static_cast<double>(l.last_seen);
     } else {  // strength of the link on the normalised information matrix
       const Vec3 dx = store_.robotInformation().diagonal().cwiseSqrt().cwiseInverse();
       const Vec2 dl = store_.node(l.slot).H.diagonal().cwiseSqrt().cwiseInverse();
       score = (dx.asDiagonal() * l.H * dl.asDiagonal()).norm();
     }
-    if (slot >= 0) score = l.slot == slot ? -1.0 : 1.0;  // `slot` alone is deactivated
     ranking_.emplace_back(score, l.slot);
   }
   std::sort(ranking_.begin(), ranking_.end());  // weakest (or oldest) first
