@@ -66,6 +66,47 @@ std::vector<Eigen::Index> blanketRows(const Eigen::MatrixXd& H, const std::vecto
   return out;
 }
 
+/// The bounded blanket, computed densely: from the queried blocks, repeatedly the block with
+/// the strongest normalised link ||D_a^-1/2 H_ac D_c^-1/2||_F to the blanket so far, until
+/// `budget` blocks have joined (SeifOptions::blanket). Rows: the queried first.
+std::vector<Eigen::Index> greedyBlanketRows(const Eigen::MatrixXd& H, const std::vector<Eigen::Index>& rows,
+                                            std::size_t budget) {
+  const auto start = [](Eigen::Index b) { return b == 0 ? Eigen::Index(0) : 3 + 2 * (b - 1); };
+  const auto size = [](Eigen::Index b) { return b == 0 ? Eigen::Index(3) : Eigen::Index(2); };
+  const Eigen::Index blocks = 1 + (H.rows() - 3) / 2;
+  const Eigen::VectorXd d = H.diagonal().cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd normalised = d.asDiagonal() * H * d.asDiagonal();
+  std::vector<bool> in(static_cast<std::size_t>(blocks), false);
+  for (Eigen::Index r : rows) in[static_cast<std::size_t>(r < 3 ? 0 : 1 + (r - 3) / 2)] = true;
+  std::vector<Eigen::Index> out = rows;
+  for (std::size_t joined = 0; joined < budget; ++joined) {
+    double best = 0.0;
+    Eigen::Index pick = -1;
+    for (Eigen::Index a = 0; a < blocks; ++a) {
+      if (!in[static_cast<std::size_t>(a)]) continue;
+      for (Eigen::Index c = 0; c < blocks; ++c) {
+        if (in[static_cast<std::size_t>(c)]) continue;
+        const double strength = normalised.block(start(a), start(c), size(a), size(c)).norm();
+        if (strength > best) {
+          best = strength;
+          pick = c;
+        }
+      }
+    }
+    if (pick < 0) break;  // nothing else is linked
+    in[static_cast<std::size_t>(pick)] = true;
+    for (Eigen::Index i = 0; i < size(pick); ++i) out.push_back(start(pick) + i);
+  }
+  return out;
+}
+
+Eigen::MatrixXd restrictedInverse(const Eigen::MatrixXd& H, const std::vector<Eigen::Index>& blanket, std::size_t n) {
+  const Eigen::MatrixXd restricted = H(blanket, blanket);
+  return restricted.llt()
+      .solve(Eigen::MatrixXd::Identity(restricted.rows(), restricted.cols()))
+      .topLeftCorner(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+}
+
 double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
 
 class MarginalsOfEveryFilter : public ::testing::TestWithParam<std::string> {};
@@ -93,19 +134,44 @@ TEST_P(MarginalsOfEveryFilter, ExactAndLocalAgreeWithTheDenseInverse) {
   if (name == "ekf" || name == "batch") {  // these hold the marginal itself in every mode
     EXPECT_LT(relDiff(local.covariance, exact.covariance), 1e-12) << GetParam();
   } else {
-    // The inverse of H restricted to the queried variables and their Markov blanket.
+    // The inverse of H restricted to the queried variables and a blanket around them: the
+    // Markov blanket for the EIF and `seif:blanket=0`, else the SEIF's bounded blanket.
     const Eigen::MatrixXd H = f->information();
-    const std::vector<Eigen::Index> blanket = blanketRows(H, rows);
-    const Eigen::MatrixXd restricted = H(blanket, blanket);
-    const Eigen::MatrixXd expected =
-        restricted.llt().solve(Eigen::MatrixXd::Identity(restricted.rows(), restricted.cols()))
-            .topLeftCorner(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(rows.size()));
-    EXPECT_LT(relDiff(local.covariance, expected), 1e-9) << GetParam();
+    const std::size_t budget = name == "eif" ? 0 : static_cast<std::size_t>(parseFilterSpec(GetParam()).seif.blanket);
+    const std::vector<Eigen::Index> blanket = budget == 0 ? blanketRows(H, rows) : greedyBlanketRows(H, rows, budget);
+    EXPECT_LT(relDiff(local.covariance, restrictedInverse(H, blanket, rows.size())), 1e-9) << GetParam();
     // Conditioning on the rest never adds uncertainty: exact - local is positive semidefinite.
     const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(exact.covariance - local.covariance).eigenvalues();
     EXPECT_GE(ev.minCoeff(), -1e-9 * exact.covariance.norm()) << GetParam();
   }
   EXPECT_THROW(f->marginal(std::vector<int>{12345}, true, MarginalMode::Exact), UnknownLandmark);
+}
+
+TEST(BoundedBlanket, GrowsTowardsTheMarginalInTheLoewnerOrder) {
+  // The blankets of growing bounds are nested, so each local marginal conditions on less than
+  // the one before: P(1) <= P(2) <= ... <= exact, and a bound beyond the map is the marginal.
+  const test::Scenario s = test::makeScenario(7, 25, 120);
+  Eigen::MatrixXd previous;
+  for (int budget : {1, 2, 4, 8, 16, 64}) {
+    const auto f = runFor("seif:blanket=" + std::to_string(budget), s, 120);
+    const std::vector<int> ids = {f->landmarkIds()[0], f->landmarkIds().back()};
+    const Eigen::MatrixXd exact = f->marginal(ids, true, MarginalMode::Exact).covariance;
+    const Eigen::MatrixXd local = f->marginal(ids, true, MarginalMode::Local).covariance;
+    const auto minEigen = [](const Eigen::MatrixXd& M) {
+      return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M).eigenvalues().minCoeff();
+    };
+    EXPECT_GE(minEigen(exact - local), -1e-9 * exact.norm()) << budget;
+    if (previous.size() > 0) {
+      EXPECT_GE(minEigen(local - previous), -1e-9 * exact.norm()) << budget;
+    }
+    if (budget == 1) {
+      EXPECT_GT(relDiff(local, exact), 1e-3);  // a small blanket is visibly overconfident
+    }
+    if (budget == 64) {
+      EXPECT_LT(relDiff(local, exact), 1e-9);
+    }
+    previous = local;
+  }
 }
 
 TEST_P(MarginalsOfEveryFilter, PredictedMeasurementIsTheLinearisedJointMarginal) {
@@ -138,7 +204,7 @@ TEST_P(MarginalsOfEveryFilter, PredictedMeasurementIsTheLinearisedJointMarginal)
 
 INSTANTIATE_TEST_SUITE_P(Filters, MarginalsOfEveryFilter,
                          ::testing::Values("ekf", "eif", "seif", "seif:mean=exact", "seif:sparsify=eseif,beta=4",
-                                           "seif:covariance=local", "batch"),
+                                           "seif:covariance=local", "seif:blanket=0", "seif:blanket=3", "batch"),
                          [](const auto& param_info) {
                            std::string n = param_info.param;
                            for (char& c : n) {

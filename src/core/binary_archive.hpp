@@ -22,7 +22,7 @@
 namespace seif {
 
 inline constexpr std::string_view kArchiveMagic = "SEIFCKPT";
-inline constexpr std::uint32_t kArchiveVersion = 2;  // 2: the config no longer holds noise sigmas
+inline constexpr std::uint32_t kArchiveVersion = 3;  // 2: the config no longer holds noise sigmas; 3: seif blanket
 inline constexpr std::size_t kArchiveHeaderSize = 32;
 
 /// FNV-1a 64 of `bytes` (the payload checksum).

@@ -134,6 +134,7 @@ struct Associator::Impl {
   std::vector<int> touched;  // landmarks to re-index at the next scan
   std::size_t refresh_cursor = 0;
   std::size_t scans = 0;  // steps with observations so far
+  std::vector<double> joint_gates;  // JCBB's chi-square(2k) gates (ScanProblem::joint_gates)
 
   void forget(int id) {
     grid.remove(id);
@@ -304,17 +305,34 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   scan.accept_d2 = s.accept_d2;
   scan.accept_probability = s.options.accept;
   scan.marginal = s.options.marginal;
+  scan.joint_gates = &s.joint_gates;
   scan.compatible.resize(observations.size());
   std::vector<double> nearest(observations.size(), std::numeric_limits<double>::infinity());
-  std::vector<int> found;
+  // Each observation's candidates from the grid; one joint marginal of the pose and all of
+  // them serves every pairing of the scan (and JCBB's joint test).
+  std::vector<std::vector<int>> found(observations.size());
+  std::vector<int> ids;
+  for (std::size_t i = 0; i < observations.size() && s.grid.ready(); ++i) {
+    s.grid.query(point[i], radius[i] + s.slack, found[i]);
+    for (int id : found[i]) {
+      if (scan.column.emplace(id, 3 + 2 * static_cast<Eigen::Index>(ids.size())).second) ids.push_back(id);
+    }
+  }
+  if (!ids.empty()) scan.joint = filter.marginal(ids, true, s.options.marginal);
   for (std::size_t i = 0; i < observations.size(); ++i) {
-    if (!s.grid.ready()) break;
-    s.grid.query(point[i], radius[i] + s.slack, found);
     const Mat2 R = sensor.noise(observations[i]);
-    for (int id : found) {
-      const PredictedMeasurement pm = filter.predictMeasurement(id, sensor, R, s.options.marginal);
-      const Vec2 nu = sensor.residual(observations[i].z, pm.z);
-      const Eigen::LLT<Mat2> llt(pm.S);
+    for (int id : found[i]) {
+      const Eigen::Index c = scan.column.at(id);
+      Mat23 J_x;
+      Mat2 J_y;
+      const Vec2 zhat = sensor.predict(scan.joint.mean.head<3>(), scan.joint.mean.segment<2>(c), &J_x, &J_y);
+      // S = J P J^T + R with J = [J_x J_y] over the pose's and this landmark's blocks of P
+      const Eigen::MatrixXd& P = scan.joint.covariance;
+      const Mat23 JP_x = J_x * P.topLeftCorner<3, 3>() + J_y * P.block<2, 3>(c, 0);
+      const Mat2 JP_y = J_x * P.block<3, 2>(0, c) + J_y * P.block<2, 2>(c, c);
+      const Mat2 S = JP_x * J_x.transpose() + JP_y * J_y.transpose() + R;
+      const Vec2 nu = sensor.residual(observations[i].z, zhat);
+      const Eigen::LLT<Mat2> llt(0.5 * (S + S.transpose()));
       if (llt.info() != Eigen::Success) continue;
       const double d2 = nu.dot(llt.solve(nu));
       nearest[i] = std::min(nearest[i], d2);

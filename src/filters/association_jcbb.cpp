@@ -53,17 +53,11 @@ class Search {
  public:
   Search(const ScanProblem& scan, std::size_t max_nodes) : max_nodes_(max_nodes) {
     const std::size_t m = scan.compatible.size();
-    std::vector<int> ids;
-    std::unordered_map<int, Eigen::Index> column;
-    for (const auto& list : scan.compatible) {
-      for (const Pairing& p : list) {
-        if (column.emplace(p.landmark, 3 + 2 * static_cast<Eigen::Index>(ids.size())).second) ids.push_back(p.landmark);
-      }
-    }
     candidates_.resize(m);
-    if (ids.empty()) return;
-    const Marginal joint = scan.filter->marginal(ids, true, scan.marginal);
-    const Pose2 x = joint.mean.head<3>();
+    // The scan's joint marginal of the pose and every candidate (association.cpp).
+    const Marginal& joint = scan.joint;
+    const auto& column = scan.column;
+    const Pose2 x = joint.mean.size() >= 3 ? Pose2(joint.mean.head<3>()) : Pose2::Zero();
     for (std::size_t i = 0; i < m; ++i) {
       for (const Pairing& p : scan.compatible[i]) {
         Candidate c;
@@ -79,8 +73,12 @@ class Search {
       std::sort(candidates_[i].begin(), candidates_[i].end(),
                 [](const Candidate& a, const Candidate& b) { return a.pairing.d2 < b.pairing.d2; });
     }
-    gates_.resize(m + 1);
-    for (std::size_t k = 1; k <= m; ++k) gates_[k] = chiSquareEvenQuantile(scan.accept_probability, static_cast<int>(k));
+    // gates[k]: the chi-square(2k) quantile, computed once per k over the run
+    std::vector<double>& gates = *scan.joint_gates;
+    for (std::size_t k = gates.size(); k <= m; ++k) {
+      gates.push_back(k == 0 ? 0.0 : chiSquareEvenQuantile(scan.accept_probability, static_cast<int>(k)));
+    }
+    gates_ = &gates;
   }
 
   std::vector<int> run(bool* truncated) {
@@ -153,7 +151,7 @@ class Search {
     if (r > 0) rhs -= L21 * y_.head(r);
     const Vec2 y = llt.matrixL().solve(rhs);
     *d2_new = d2 + y.squaredNorm();
-    if (!(*d2_new <= gates_[static_cast<std::size_t>(k + 1)])) return false;
+    if (!(*d2_new <= (*gates_)[static_cast<std::size_t>(k + 1)])) return false;
     if (r > 0) L_.block(r, 0, 2, r) = L21;
     L_.block<2, 2>(r, r) = llt.matrixL();
     y_.segment<2>(r) = y;
@@ -162,7 +160,7 @@ class Search {
 
   std::size_t max_nodes_;
   std::vector<std::vector<Candidate>> candidates_;
-  std::vector<double> gates_;
+  const std::vector<double>* gates_ = nullptr;
   std::vector<const Candidate*> chosen_;
   std::vector<int> best_;
   int best_pairings_ = -1;

@@ -5,6 +5,7 @@
 #include <seif/filters/slam_filter.hpp>
 
 #include <cstddef>
+#include <unordered_map>
 #include <vector>
 
 namespace seif {
@@ -23,6 +24,13 @@ struct ScanProblem {
   double accept_d2 = 0.0;                        ///< the accept gate (2 dof)
   double accept_probability = 0.99;              ///< for the joint gate's chi-square(2k)
   MarginalMode marginal = MarginalMode::Exact;
+  /// The joint marginal of the pose (first 3 rows) and every candidate of the scan, and
+  /// where each candidate's 2 rows start in it.
+  Marginal joint;
+  std::unordered_map<int, Eigen::Index> column;
+  /// JCBB's joint gates, chi-square(2k) at accept_probability by k, kept across scans (the
+  /// search extends it as far as a scan needs).
+  std::vector<double>* joint_gates = nullptr;
 };
 
 /// Per observation: the landmark id it is paired with, or -1.

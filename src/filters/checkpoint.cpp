@@ -76,6 +76,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.u64(static_cast<std::uint64_t>(o.covariance));
   out.i64(o.beta);
   out.f64(o.reanchor);
+  out.i64(o.blanket);
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -96,6 +97,8 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
     o.reanchor = in.f64("reanchor");
     if (!(o.reanchor >= 0.0) || !std::isfinite(o.reanchor)) in.fail("reanchor must be finite and >= 0");
   }
+  // Version 2 had no bound: its local marginals used the whole Markov blanket.
+  o.blanket = in.version() >= 3 ? static_cast<int>(in.i64In("blanket", 0, kIntMax)) : 0;
   return o;
 }
 

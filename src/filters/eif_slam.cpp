@@ -71,9 +71,13 @@ Marginal EifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalMo
     const auto dim = [](int v) { return v < 0 ? Eigen::Index(3) : Eigen::Index(2); };
     m.covariance = localMarginalCovariance(
         vars,
-        [&](int v, std::vector<int>& out) {  // every variable with a non-zero block beside v
+        [&](int v, std::vector<BlanketLink>& out) {  // every variable with a non-zero block beside v
+          const Eigen::VectorXd dv = H_.diagonal().segment(at(v), dim(v));
           for (int c = -1; c < book_.size(); ++c) {
-            if (c != v && H_.block(at(v), at(c), dim(v), dim(c)).cwiseAbs().maxCoeff() > 0.0) out.push_back(c);
+            const auto B = H_.block(at(v), at(c), dim(v), dim(c));
+            if (c != v && B.cwiseAbs().maxCoeff() > 0.0) {
+              out.push_back({c, linkStrength(dv, B, H_.diagonal().segment(at(c), dim(c)))});
+            }
           }
         },
         [&](int a, int c) { return Eigen::MatrixXd(H_.block(at(a), at(c), dim(a), dim(c))); }, "eif");

@@ -71,7 +71,7 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 // here is the one line a flag or a spec error shows.
 void applyProfile(FilterSpec& s, std::string_view v);
 
-const std::array<FilterOption, 16> kOptions = {{
+const std::array<FilterOption, 17> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
      "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=30 "
      "(honest covariances in constant time; README)",
@@ -124,9 +124,14 @@ const std::array<FilterOption, 16> kOptions = {{
      [](const FilterSpec& s) { return std::string(optionName(s.seif.relax_order)); }},
     {"covariance", kSeif, kChoice, "exact|local", 0, 0,
      "how poseCovariance() and landmarkCovariance() are recovered: exact (one sparse factorisation "
-     "per changed H) or local (the Markov blanket's, constant time, for display)",
+     "per changed H) or local (a bounded blanket's, constant time, for display)",
      [](FilterSpec& s, std::string_view v) { s.seif.covariance = SeifOptions::parseCovariance(v); },
      [](const FilterSpec& s) { return std::string(optionName(s.seif.covariance)); }},
+    {"blanket", kSeif, kInteger, "", 0, kIntMax,
+     "local marginals (gates, covariance=local): at most this many variables besides the queried "
+     "ones, the strongest-linked first (0: the whole Markov blanket, unbounded)",
+     [](FilterSpec& s, std::string_view v) { s.seif.blanket = static_cast<int>(parseInteger("blanket", v, 0, kIntMax)); },
+     [](const FilterSpec& s) { return std::to_string(s.seif.blanket); }},
     {"reanchor", kSeif, Opt::Kind::Length, "", 0, 0,
      "linearization=invariant: re-anchor an observed landmark whose mean moved more than this [m]",
      [](FilterSpec& s, std::string_view v) { s.seif.reanchor = parseLength("reanchor", v); },

@@ -6,6 +6,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
+#include <queue>
+#include <unordered_map>
 #include <cmath>
 #include <string>
 
@@ -155,34 +157,57 @@ MeasurementInformation measurementInformation(const MeasurementModel& sensor, co
 }
 
 Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
-                                        const std::function<void(int, std::vector<int>&)>& neighbours,
+                                        const std::function<void(int, std::vector<BlanketLink>&)>& neighbours,
                                         const std::function<Eigen::MatrixXd(int, int)>& block,
-                                        const std::string& filter) {
-  // The blanket: robot first when in it, then the queried landmarks, then their neighbours.
-  std::vector<int> found;
-  for (int v : vars) neighbours(v, found);
+                                        const std::string& filter, std::size_t budget) {
+  // The blanket: the queried variables first, then the others in the order they joined;
+  // each member's links are kept for assembling H below.
   std::vector<int> order;
-  const auto has = [&](int v) { return std::find(order.begin(), order.end(), v) != order.end(); };
-  const bool robot = std::find(vars.begin(), vars.end(), -1) != vars.end() ||
-                     std::find(found.begin(), found.end(), -1) != found.end();
-  if (robot) order.push_back(-1);
+  std::unordered_map<int, std::size_t> index;
+  std::vector<std::vector<BlanketLink>> links;
+  const auto join = [&](int v) {
+    index.emplace(v, order.size());
+    order.push_back(v);
+    links.emplace_back();
+    neighbours(v, links.back());
+  };
   for (int v : vars) {
-    if (!has(v)) order.push_back(v);
+    if (!index.count(v)) join(v);
   }
-  for (int v : found) {
-    if (!has(v)) order.push_back(v);
+  const std::size_t queried = order.size();
+  if (budget == 0) {  // the Markov blanket
+    for (std::size_t a = 0; a < queried; ++a) {
+      for (std::size_t k = 0; k < links[a].size(); ++k) {
+        const int c = links[a][k].var;  // links[] grows in join(): index, do not hold a reference
+        if (!index.count(c)) join(c);
+      }
+    }
+  } else {  // grown along the strongest link to the blanket so far
+    std::priority_queue<std::pair<double, int>> frontier;
+    const auto offer = [&](std::size_t a) {
+      for (const BlanketLink& l : links[a]) {
+        if (!index.count(l.var)) frontier.emplace(l.strength, l.var);
+      }
+    };
+    for (std::size_t a = 0; a < queried; ++a) offer(a);
+    while (order.size() - queried < budget && !frontier.empty()) {
+      const int c = frontier.top().second;
+      frontier.pop();
+      if (index.count(c)) continue;
+      join(c);
+      offer(order.size() - 1);
+    }
   }
   const auto dim = [](int v) { return v < 0 ? Eigen::Index(3) : Eigen::Index(2); };
   std::vector<Eigen::Index> offset(order.size() + 1, 0);
   for (std::size_t a = 0; a < order.size(); ++a) offset[a + 1] = offset[a] + dim(order[a]);
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(offset.back(), offset.back());
-  std::vector<int> linked;
   for (std::size_t a = 0; a < order.size(); ++a) {
     H.block(offset[a], offset[a], dim(order[a]), dim(order[a])) = block(order[a], order[a]);
-    linked.clear();
-    neighbours(order[a], linked);
-    for (std::size_t c = a + 1; c < order.size(); ++c) {
-      if (std::find(linked.begin(), linked.end(), order[c]) == linked.end()) continue;
+    for (const BlanketLink& l : links[a]) {
+      const auto it = index.find(l.var);
+      if (it == index.end() || it->second <= a) continue;
+      const std::size_t c = it->second;
       const Eigen::MatrixXd B = block(order[a], order[c]);
       H.block(offset[a], offset[c], B.rows(), B.cols()) = B;
       H.block(offset[c], offset[a], B.cols(), B.rows()) = B.transpose();
@@ -192,26 +217,18 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
   if (llt.info() != Eigen::Success) {
     throw NumericError(filter + ": the information of a Markov blanket is not positive definite");
   }
-  // Only the queried variables' columns, in the order asked.
+  // Only the queried variables' columns, in the order asked (they lead the blanket).
   Eigen::Index n = 0;
   for (int v : vars) n += dim(v);
-  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(H.rows(), n);
-  std::vector<Eigen::Index> at;
-  Eigen::Index col = 0;
+  const Eigen::Index q = offset[queried];
+  const Eigen::MatrixXd X = llt.solve(Eigen::MatrixXd::Identity(H.rows(), q)).topRows(q);
+  std::vector<Eigen::Index> rows;
+  rows.reserve(static_cast<std::size_t>(n));
   for (int v : vars) {
-    const auto a = static_cast<std::size_t>(std::find(order.begin(), order.end(), v) - order.begin());
-    E.block(offset[a], col, dim(v), dim(v)).setIdentity();
-    at.push_back(offset[a]);
-    col += dim(v);
+    const Eigen::Index at = offset[index.at(v)];
+    for (Eigen::Index i = 0; i < dim(v); ++i) rows.push_back(at + i);
   }
-  const Eigen::MatrixXd X = llt.solve(E);
-  Eigen::MatrixXd P(n, n);
-  Eigen::Index row = 0;
-  for (std::size_t i = 0; i < at.size(); ++i) {
-    P.middleRows(row, dim(vars[i])) = X.middleRows(at[i], dim(vars[i]));
-    row += dim(vars[i]);
-  }
-  return P;
+  return X(rows, rows);
 }
 
 FilterStats denseLinkStats(const Eigen::MatrixXd& H) {

@@ -80,17 +80,37 @@ MeasurementInformation measurementInformation(const MeasurementModel& sensor, co
                                               const std::optional<Anchors>& anchors = std::nullopt,
                                               const std::optional<ObservabilityConstraint>& constraint = std::nullopt);
 
+/// A variable linked to another in H (-1 the robot, else a landmark slot) and the link's
+/// strength: the norm of the block on the normalised information matrix,
+/// ||D_a^-1/2 H_ac D_c^-1/2||_F with D the diagonals of H_aa and H_cc (the partial correlation
+/// the link carries; the paper's sparsification ranks the robot's links the same way).
+struct BlanketLink {
+  int var = 0;
+  double strength = 0.0;
+};
+
+/// The strength of a link H_ac between variables whose information diagonals are da and dc.
+template <class Block, class DiagA, class DiagC>
+double linkStrength(const DiagA& da, const Block& H_ac, const DiagC& dc) {
+  return (da.cwiseSqrt().cwiseInverse().asDiagonal() * H_ac * dc.cwiseSqrt().cwiseInverse().asDiagonal()).norm();
+}
+
 /// The Local marginal (SlamFilter::marginal, MarginalMode::Local): the joint covariance of
 /// `vars` (-1 the robot, else landmark slots; in that order in the result) read off the
-/// inverse of H restricted to them and their Markov blanket. `neighbours(v, out)` appends
-/// the variables linked to v; `block(a, c)` is H_{a,c} (3 or 2 rows and columns by kind;
-/// called only for linked pairs and the diagonal). The blanket is ordered robot first, then
-/// the queried landmarks, then their neighbours as found. O(b^3) for a blanket of b
-/// variables. Throws NumericError when the restricted information is not positive definite.
+/// inverse of H restricted to them and a blanket around them. `neighbours(v, out)` appends
+/// the variables linked to v with their strengths; `block(a, c)` is H_{a,c} (3 or 2 rows and
+/// columns by kind; called only for linked pairs and the diagonal).
+/// - budget 0: the blanket is the Markov blanket, every variable linked to a queried one.
+/// - budget b > 0: the blanket grows from the queried variables one variable at a time, the
+///   one with the strongest link to those already in, at any distance, until it holds b
+///   variables besides the queried ones. The blankets of growing budgets are nested, so the
+///   result grows with b (conditioning on less) towards the exact marginal.
+/// O(s^3) for s variables in the blanket. Throws NumericError when the restricted
+/// information is not positive definite.
 Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
-                                        const std::function<void(int, std::vector<int>&)>& neighbours,
+                                        const std::function<void(int, std::vector<BlanketLink>&)>& neighbours,
                                         const std::function<Eigen::MatrixXd(int, int)>& block,
-                                        const std::string& filter);
+                                        const std::string& filter, std::size_t budget = 0);
 
 /// Counts the links of a dense information matrix in the state order [robot, landmarks]:
 /// non-zero off-diagonal blocks, the robot's links and the largest landmark degree.

@@ -270,17 +270,29 @@ Eigen::MatrixXd SeifSlam::localCovariance(std::initializer_list<int> vars) const
 }
 
 Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars) const {
-  // The Markov blanket from the store's links: the robot's are the active landmarks; a
-  // landmark's are its linked landmarks, and the robot when it is active.
+  // The blanket from the store's links: the robot's are the active landmarks; a landmark's
+  // are its linked landmarks, and the robot when it is active. Bounded by options_.blanket.
+  const auto diag = [&](int v) -> Eigen::Vector3d {
+    if (v < 0) return store_.robotInformation().diagonal();
+    return Eigen::Vector3d(store_.node(v).H(0, 0), store_.node(v).H(1, 1), 0.0);
+  };
   return localMarginalCovariance(
       vars,
-      [&](int v, std::vector<int>& out) {
+      [&](int v, std::vector<BlanketLink>& out) {
         if (v < 0) {
-          for (const SeifStore::RobotLink& l : store_.robotLinks()) out.push_back(l.slot);
+          const Vec3 dx = diag(-1);
+          for (const SeifStore::RobotLink& l : store_.robotLinks()) {
+            out.push_back({l.slot, linkStrength(dx, l.H, diag(l.slot).head<2>())});
+          }
           return;
         }
-        if (store_.node(v).active >= 0) out.push_back(-1);
-        for (const SeifStore::Link& l : store_.node(v).links) out.push_back(l.slot);
+        const Vec2 dv = diag(v).head<2>();
+        const SeifStore::Node& node = store_.node(v);
+        if (node.active >= 0) {
+          const Mat32& H = store_.robotLinks()[static_cast<std::size_t>(node.active)].H;
+          out.push_back({-1, linkStrength(diag(-1), H, dv)});
+        }
+        for (const SeifStore::Link& l : node.links) out.push_back({l.slot, linkStrength(dv, l.H, diag(l.slot).head<2>())});
       },
       [&](int a, int c) -> Eigen::MatrixXd {
         if (a < 0 && c < 0) return store_.robotInformation();
@@ -289,7 +301,7 @@ Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars) const {
         if (a == c) return store_.node(a).H;
         return *store_.findLink(a, c);
       },
-      "seif (step " + std::to_string(store_.step()) + ")");
+      "seif (step " + std::to_string(store_.step()) + ")", static_cast<std::size_t>(options_.blanket));
 }
 
 Marginal SeifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalMode mode) const {

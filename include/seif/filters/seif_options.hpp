@@ -42,10 +42,16 @@ struct SeifOptions {
   /// How poseCovariance() and landmarkCovariance() are recovered. Exact: from the sparse
   /// Cholesky factor of H and its selected inverse, one factorisation per changed H (O(N)
   /// at the paper's sparsity, cached: every marginal of one state costs it once). Local: the
-  /// inverse of H restricted to the variable's Markov blanket (the robot and the active
-  /// landmarks; a landmark and its neighbours), O(1): it conditions on everything outside,
+  /// inverse of H restricted to a blanket around the variable (`blanket`), O(1): it
+  /// conditions on everything outside,
   /// so it is smaller than the marginal - an approximation for display, not for gating.
   Covariance covariance = Covariance::Exact;
+  /// The blanket of a local marginal (MarginalMode::Local, Covariance::Local): at most this
+  /// many variables besides the queried ones, grown from them along the strongest links
+  /// (normalised, at any distance). 0: the whole Markov blanket, which is not bounded (a
+  /// landmark of Victoria Park carries up to 189 links). A larger blanket conditions on less
+  /// and comes closer to the marginal; docs/association.md measures it against the exact one.
+  int blanket = 32;
   /// Eseif: how many landmarks' observations relocalise the robot (z_beta), best informed
   /// first: >= 2 (a 2-D point sensor's least for the 3-dof pose), more while the pose is
   /// ill-conditioned, never more than `active`. A step with fewer mapped landmarks in view
