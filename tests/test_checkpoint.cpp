@@ -370,6 +370,14 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   EXPECT_TRUE(v1->mean() == v2->mean());
   EXPECT_TRUE(v1->covariance() == v2->covariance());
   EXPECT_EQ(v1->landmarkIds(), v2->landmarkIds());
+  // A version-2 SEIF (no blanket bound stored) loads to the same state as the version-3 file,
+  // its local marginals over the whole Markov blanket (blanket 0) as before.
+  const auto seif2 = load(root / "corpus" / "fuzz_checkpoint" / "seif-v2.ckpt");
+  const auto seif3 = load(root / "corpus" / "fuzz_checkpoint" / "seif.ckpt");
+  EXPECT_TRUE(seif2->mean() == seif3->mean());
+  EXPECT_TRUE(seif2->information() == seif3->information());
+  EXPECT_EQ(dynamic_cast<const SeifSlam&>(*seif2).options().blanket, 0);
+  EXPECT_EQ(dynamic_cast<const SeifSlam&>(*seif3).options().blanket, SeifOptions{}.blanket);
 }
 #endif
 

@@ -145,6 +145,43 @@ TEST(LandmarkRemoval, SparsifiedSeifRemovesExactlyInItsOwnInformation) {
   EXPECT_TRUE(f->pose().allFinite());
 }
 
+TEST(LandmarkRemoval, AnInvariantSeifMergeThatCannotShareAnAnchorRemovesTheNewerLandmark) {
+  // Re-anchoring one of two landmarks to the other's anchor links its neighbours to the robot;
+  // when both carry more links than the robot's local block has room for, the merge removes
+  // `drop` exactly instead (its Schur complement) and the filter goes on.
+  const test::Scenario s = test::makeScenario(8, 40, 150);
+  auto f = makeFilter("seif:linearization=invariant,active=30", s.start, test::configFor(s));
+  for (std::size_t k = 0; k < 150; ++k) f->step(s.steps[k].u, s.steps[k].observations);
+  const Eigen::MatrixXd H = f->information();
+  const auto links = [&](int id) {
+    const Eigen::Index l = 3 + 2 * slotOf(*f, id);
+    int n = 0;
+    for (Eigen::Index c = 3; c < H.cols(); c += 2) {
+      if (c != l && !H.block(l, c, 2, 2).isZero(0.0)) ++n;
+    }
+    return n;
+  };
+  const auto passive = [&](int id) { return H.block(0, 3 + 2 * slotOf(*f, id), 3, 2).isZero(0.0); };
+  std::vector<int> crowded;  // landmarks whose re-anchoring would overflow the local block
+  for (int id : f->landmarkIds()) {
+    if (30 + links(id) >= 39) crowded.push_back(id);
+  }
+  ASSERT_GE(crowded.size(), 2u) << "the scenario must link landmarks densely";
+  const auto drop_it = std::find_if(crowded.begin() + 1, crowded.end(), passive);
+  ASSERT_NE(drop_it, crowded.end());
+  const int keep = crowded.front(), drop = *drop_it;
+  const Eigen::Index l = 3 + 2 * slotOf(*f, drop);
+  const Eigen::MatrixXd Hcol = H.middleCols(l, 2);
+  const Eigen::MatrixXd schur = H - Hcol * H.block(l, l, 2, 2).llt().solve(Hcol.transpose());
+  const std::vector<Eigen::Index> rows = keptRows(H.rows(), slotOf(*f, drop));
+  f->mergeLandmarks(keep, drop);
+  EXPECT_FALSE(f->hasLandmark(drop));
+  EXPECT_TRUE(f->hasLandmark(keep));
+  EXPECT_LT(relDiff(f->information(), schur(rows, rows)), 1e-12);
+  for (std::size_t k = 0; k < 20; ++k) f->step(s.steps[k].u, s.steps[k].observations);
+  EXPECT_TRUE(f->pose().allFinite());
+}
+
 TEST(LandmarkRemoval, TheBatchRefuses) {
   const test::Scenario s = test::makeScenario(4, 10, 20);
   auto f = makeFilter("batch", s.start, test::configFor(s));

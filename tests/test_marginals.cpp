@@ -86,7 +86,7 @@ std::vector<Eigen::Index> greedyBlanketRows(const Eigen::MatrixXd& H, const std:
       if (!in[static_cast<std::size_t>(a)]) continue;
       for (Eigen::Index c = 0; c < blocks; ++c) {
         if (in[static_cast<std::size_t>(c)]) continue;
-        const double strength = normalised.block(start(a), start(c), size(a), size(c)).norm();
+        const double strength = normalised.block(start(a), start(c), size(a), size(c)).squaredNorm();
         if (strength > best) {
           best = strength;
           pick = c;

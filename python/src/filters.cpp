@@ -67,9 +67,12 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("beta", &SeifOptions::beta, "ESEIF: landmarks whose observations relocalise the robot")
       .def_readwrite("reanchor", &SeifOptions::reanchor,
                      "linearization=invariant: re-anchor an observed landmark whose mean moved more than this [m]")
+      .def_readwrite("blanket", &SeifOptions::blanket,
+                     "local marginals: at most this many variables besides the queried ones, strongest links "
+                     "first (0: the whole Markov blanket)")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta", "reanchor"});
+                          "covariance", "beta", "reanchor", "blanket"});
       });
 }
 

@@ -33,16 +33,24 @@ std::string_view associationMethodName(AssociationMethod m) {
   return "known";
 }
 
-double correspondenceDistance(const SlamFilter& filter, int a, int b, MarginalMode mode) {
-  const int ids[2] = {a, b};
-  const Marginal m = filter.marginal(ids, false, mode);
-  const Vec2 delta = m.mean.head<2>() - m.mean.tail<2>();
-  // F_Delta = [I, -I]: Sigma_aa + Sigma_bb - Sigma_ab - Sigma_ba
-  const Mat2 S = m.covariance.topLeftCorner<2, 2>() + m.covariance.bottomRightCorner<2, 2>() -
-                 m.covariance.topRightCorner<2, 2>() - m.covariance.bottomLeftCorner<2, 2>();
+namespace {
+
+/// Delta = y_a - y_b with Sigma_Delta = F_Delta Sigma F_Delta^T, F_Delta = [I, -I]:
+/// Sigma_aa + Sigma_bb - Sigma_ab - Sigma_ba, from a marginal holding both at rows ra, rb.
+double correspondenceD2(const Marginal& m, Eigen::Index ra, Eigen::Index rb) {
+  const Vec2 delta = m.mean.segment<2>(ra) - m.mean.segment<2>(rb);
+  const Eigen::MatrixXd& P = m.covariance;
+  const Mat2 S = P.block<2, 2>(ra, ra) + P.block<2, 2>(rb, rb) - P.block<2, 2>(ra, rb) - P.block<2, 2>(rb, ra);
   const Eigen::LLT<Mat2> llt(0.5 * (S + S.transpose()));
   if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
   return delta.dot(llt.solve(delta));
+}
+
+}  // namespace
+
+double correspondenceDistance(const SlamFilter& filter, int a, int b, MarginalMode mode) {
+  const int ids[2] = {a, b};
+  return correspondenceD2(filter.marginal(ids, false, mode), 0, 2);
 }
 
 namespace {
@@ -179,7 +187,13 @@ struct Associator::Impl {
   /// correspondence test cannot tell from it (never two seen in the same scan).
   void mergeDuplicates(SlamFilter& filter, const std::vector<int>& last_scan) {
     if (merge_d2 <= 0.0 || !grid.ready()) return;
-    std::vector<int> near;
+    // The pairs to test, and one joint marginal of every landmark in them.
+    std::vector<std::pair<int, int>> pairs;
+    std::vector<int> ids, near;
+    std::unordered_map<int, Eigen::Index> row;
+    const auto add = [&](int id) {
+      if (row.emplace(id, 2 * static_cast<Eigen::Index>(ids.size())).second) ids.push_back(id);
+    };
     for (int id : last_scan) {
       if (!filter.hasLandmark(id)) continue;
       grid.query(filter.landmark(id), slack, near);
@@ -188,22 +202,36 @@ struct Associator::Impl {
             std::find(last_scan.begin(), last_scan.end(), other) != last_scan.end()) {
           continue;
         }
-        if (correspondenceDistance(filter, id, other, options.marginal) > merge_d2) continue;
-        const int keep = std::min(id, other), drop = std::max(id, other);  // the older stays
-        filter.mergeLandmarks(keep, drop);
-        for (const auto& [truth, n] : seen_truths[drop]) seen_truths[keep][truth] += n;
-        seen_truths.erase(drop);
-        const auto pd = provisional.find(drop);
-        const auto pk = provisional.find(keep);
-        if (pk != provisional.end()) {
-          pk->second.sightings += pd != provisional.end() ? pd->second.sightings : options.confirm;
-          if (pk->second.sightings >= options.confirm) provisional.erase(pk);
-        }
-        forget(drop);
-        grid.put(keep, filter.landmark(keep));
-        ++counts.merged;
-        break;  // `id` may be gone: on to the next
+        pairs.emplace_back(id, other);
+        add(id);
+        add(other);
       }
+    }
+    if (pairs.empty()) return;
+    const Marginal joint = filter.marginal(ids, false, options.marginal);
+    bool merged_any = false;
+    int done = -1;  // `id` whose merge ended its pairs
+    for (const auto& [id, other] : pairs) {
+      if (id == done || !filter.hasLandmark(id) || !filter.hasLandmark(other)) continue;
+      // After a merge the joint marginal is stale: the rest are tested one by one.
+      const double d2 = merged_any ? correspondenceDistance(filter, id, other, options.marginal)
+                                   : correspondenceD2(joint, row.at(id), row.at(other));
+      if (d2 > merge_d2) continue;
+      const int keep = std::min(id, other), drop = std::max(id, other);  // the older stays
+      filter.mergeLandmarks(keep, drop);
+      for (const auto& [truth, n] : seen_truths[drop]) seen_truths[keep][truth] += n;
+      seen_truths.erase(drop);
+      const auto pd = provisional.find(drop);
+      const auto pk = provisional.find(keep);
+      if (pk != provisional.end()) {
+        pk->second.sightings += pd != provisional.end() ? pd->second.sightings : options.confirm;
+        if (pk->second.sightings >= options.confirm) provisional.erase(pk);
+      }
+      forget(drop);
+      grid.put(keep, filter.landmark(keep));
+      ++counts.merged;
+      merged_any = true;
+      done = id;  // `id` may be gone: on to the next
     }
   }
 

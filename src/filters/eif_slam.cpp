@@ -76,11 +76,11 @@ Marginal EifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalMo
           for (int c = -1; c < book_.size(); ++c) {
             const auto B = H_.block(at(v), at(c), dim(v), dim(c));
             if (c != v && B.cwiseAbs().maxCoeff() > 0.0) {
-              out.push_back({c, linkStrength(dv, B, H_.diagonal().segment(at(c), dim(c)))});
+              out.push_back({c, linkStrength(dv, B, H_.diagonal().segment(at(c), dim(c))), &H_(at(v), at(c)), H_.rows()});
             }
           }
         },
-        [&](int a, int c) { return Eigen::MatrixXd(H_.block(at(a), at(c), dim(a), dim(c))); }, "eif");
+        [&](int v) { return Eigen::MatrixXd(H_.block(at(v), at(v), dim(v), dim(v))); }, "eif");
     return m;
   }
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(H_.rows(), static_cast<Eigen::Index>(rows.size()));

@@ -156,44 +156,90 @@ MeasurementInformation measurementInformation(const MeasurementModel& sensor, co
   return info;
 }
 
+namespace {
+
+/// Where each variable sits in a blanket (-1: outside), by v + 1. The table is kept per
+/// thread across queries and grows with the map; a query resets only its own entries.
+class BlanketIndex {
+ public:
+  BlanketIndex() : pos_(table()) {}
+  ~BlanketIndex() {
+    for (int v : members_) pos_[static_cast<std::size_t>(v + 1)] = -1;
+  }
+  BlanketIndex(const BlanketIndex&) = delete;
+  BlanketIndex& operator=(const BlanketIndex&) = delete;
+  int find(int v) const {
+    const auto k = static_cast<std::size_t>(v + 1);
+    return k < pos_.size() ? pos_[k] : -1;
+  }
+  bool has(int v) const { return find(v) >= 0; }
+  void insert(int v, int position) {
+    const auto k = static_cast<std::size_t>(v + 1);
+    if (k >= pos_.size()) pos_.resize(std::max(k + 1, 2 * pos_.size()), -1);
+    pos_[k] = position;
+    members_.push_back(v);
+  }
+
+ private:
+  static std::vector<int>& table() {
+    thread_local std::vector<int> t;
+    return t;
+  }
+  std::vector<int>& pos_;
+  std::vector<int> members_;
+};
+
+}  // namespace
+
 Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
                                         const std::function<void(int, std::vector<BlanketLink>&)>& neighbours,
-                                        const std::function<Eigen::MatrixXd(int, int)>& block,
+                                        const std::function<Eigen::MatrixXd(int)>& diagonal,
                                         const std::string& filter, std::size_t budget) {
   // The blanket: the queried variables first, then the others in the order they joined;
   // each member's links are kept for assembling H below.
   std::vector<int> order;
-  std::unordered_map<int, std::size_t> index;
+  BlanketIndex index;
   std::vector<std::vector<BlanketLink>> links;
   const auto join = [&](int v) {
-    index.emplace(v, order.size());
+    index.insert(v, static_cast<int>(order.size()));
     order.push_back(v);
     links.emplace_back();
     neighbours(v, links.back());
   };
   for (int v : vars) {
-    if (!index.count(v)) join(v);
+    if (!index.has(v)) join(v);
   }
   const std::size_t queried = order.size();
   if (budget == 0) {  // the Markov blanket
     for (std::size_t a = 0; a < queried; ++a) {
       for (std::size_t k = 0; k < links[a].size(); ++k) {
         const int c = links[a][k].var;  // links[] grows in join(): index, do not hold a reference
-        if (!index.count(c)) join(c);
+        if (!index.has(c)) join(c);
       }
     }
   } else {  // grown along the strongest link to the blanket so far
+    // Only a member's budget + queried strongest links can ever be chosen (every stronger
+    // one would have to join first, and the blanket never holds more), so only those enter.
     std::priority_queue<std::pair<double, int>> frontier;
+    std::vector<std::pair<double, int>> offered;
+    const std::size_t most = budget + queried;
     const auto offer = [&](std::size_t a) {
-      for (const BlanketLink& l : links[a]) {
-        if (!index.count(l.var)) frontier.emplace(l.strength, l.var);
+      offered.clear();
+      for (const BlanketLink& l : links[a]) offered.emplace_back(l.strength, l.var);
+      if (offered.size() > most) {
+        std::nth_element(offered.begin(), offered.begin() + static_cast<std::ptrdiff_t>(most), offered.end(),
+                         std::greater<>());
+        offered.resize(most);
+      }
+      for (const auto& o : offered) {
+        if (!index.has(o.second)) frontier.push(o);
       }
     };
     for (std::size_t a = 0; a < queried; ++a) offer(a);
     while (order.size() - queried < budget && !frontier.empty()) {
       const int c = frontier.top().second;
       frontier.pop();
-      if (index.count(c)) continue;
+      if (index.has(c)) continue;
       join(c);
       offer(order.size() - 1);
     }
@@ -203,14 +249,17 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
   for (std::size_t a = 0; a < order.size(); ++a) offset[a + 1] = offset[a] + dim(order[a]);
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(offset.back(), offset.back());
   for (std::size_t a = 0; a < order.size(); ++a) {
-    H.block(offset[a], offset[a], dim(order[a]), dim(order[a])) = block(order[a], order[a]);
+    const Eigen::Index da = dim(order[a]);
+    H.block(offset[a], offset[a], da, da) = diagonal(order[a]);
     for (const BlanketLink& l : links[a]) {
-      const auto it = index.find(l.var);
-      if (it == index.end() || it->second <= a) continue;
-      const std::size_t c = it->second;
-      const Eigen::MatrixXd B = block(order[a], order[c]);
-      H.block(offset[a], offset[c], B.rows(), B.cols()) = B;
-      H.block(offset[c], offset[a], B.cols(), B.rows()) = B.transpose();
+      if (l.block == nullptr) continue;  // written from the other side
+      const int found = index.find(l.var);
+      if (found < 0) continue;
+      const auto c = static_cast<std::size_t>(found);
+      const Eigen::Index dc = dim(l.var);
+      const Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> B(l.block, da, dc, Eigen::OuterStride<>(l.stride));
+      H.block(offset[a], offset[c], da, dc) = B;
+      H.block(offset[c], offset[a], dc, da) = B.transpose();
     }
   }
   const Eigen::LLT<Eigen::MatrixXd> llt(H);
@@ -225,7 +274,7 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
   std::vector<Eigen::Index> rows;
   rows.reserve(static_cast<std::size_t>(n));
   for (int v : vars) {
-    const Eigen::Index at = offset[index.at(v)];
+    const Eigen::Index at = offset[static_cast<std::size_t>(index.find(v))];
     for (Eigen::Index i = 0; i < dim(v); ++i) rows.push_back(at + i);
   }
   return X(rows, rows);

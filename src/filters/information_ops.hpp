@@ -81,25 +81,33 @@ MeasurementInformation measurementInformation(const MeasurementModel& sensor, co
                                               const std::optional<ObservabilityConstraint>& constraint = std::nullopt);
 
 /// A variable linked to another in H (-1 the robot, else a landmark slot) and the link's
-/// strength: the norm of the block on the normalised information matrix,
-/// ||D_a^-1/2 H_ac D_c^-1/2||_F with D the diagonals of H_aa and H_cc (the partial correlation
-/// the link carries; the paper's sparsification ranks the robot's links the same way).
+/// strength: the squared norm of the block on the normalised information matrix,
+/// ||D_a^-1/2 H_ac D_c^-1/2||_F^2 with D the diagonals of H_aa and H_cc (the partial
+/// correlation the link carries; the paper's sparsification ranks the robot's links the same way).
 struct BlanketLink {
   int var = 0;
   double strength = 0.0;
+  /// H_{v,var} (dim v x dim var, column-major, columns `stride` apart), or nullptr when the
+  /// link is read from var's side (as H_{var,v}).
+  const double* block = nullptr;
+  Eigen::Index stride = 0;
 };
 
 /// The strength of a link H_ac between variables whose information diagonals are da and dc.
 template <class Block, class DiagA, class DiagC>
 double linkStrength(const DiagA& da, const Block& H_ac, const DiagC& dc) {
-  return (da.cwiseSqrt().cwiseInverse().asDiagonal() * H_ac * dc.cwiseSqrt().cwiseInverse().asDiagonal()).norm();
+  double s = 0.0;
+  for (Eigen::Index i = 0; i < H_ac.rows(); ++i) {
+    for (Eigen::Index j = 0; j < H_ac.cols(); ++j) s += H_ac(i, j) * H_ac(i, j) / (da(i) * dc(j));
+  }
+  return s;
 }
 
 /// The Local marginal (SlamFilter::marginal, MarginalMode::Local): the joint covariance of
 /// `vars` (-1 the robot, else landmark slots; in that order in the result) read off the
 /// inverse of H restricted to them and a blanket around them. `neighbours(v, out)` appends
-/// the variables linked to v with their strengths; `block(a, c)` is H_{a,c} (3 or 2 rows and
-/// columns by kind; called only for linked pairs and the diagonal).
+/// the variables linked to v with their strengths and blocks (each link's block given by at
+/// least one side); `diagonal(v)` is H_{v,v} (3x3 for the robot, else 2x2).
 /// - budget 0: the blanket is the Markov blanket, every variable linked to a queried one.
 /// - budget b > 0: the blanket grows from the queried variables one variable at a time, the
 ///   one with the strongest link to those already in, at any distance, until it holds b
@@ -109,7 +117,7 @@ double linkStrength(const DiagA& da, const Block& H_ac, const DiagC& dc) {
 /// information is not positive definite.
 Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
                                         const std::function<void(int, std::vector<BlanketLink>&)>& neighbours,
-                                        const std::function<Eigen::MatrixXd(int, int)>& block,
+                                        const std::function<Eigen::MatrixXd(int)>& diagonal,
                                         const std::string& filter, std::size_t budget = 0);
 
 /// Counts the links of a dense information matrix in the state order [robot, landmarks]:

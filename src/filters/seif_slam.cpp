@@ -208,8 +208,23 @@ void SeifSlam::removeLandmark(int id) {
 void SeifSlam::mergeLandmarks(int keep, int drop) {
   const int k = book_.require(keep), d = book_.require(drop);
   if (k == d) throw InvalidArgument("seif: cannot merge landmark " + std::to_string(keep) + " with itself");
-  if (config_.linearization == Linearization::Invariant) {  // one variable: one anchor
-    store_.reanchorLandmark(d, store_.node(k).anchor);
+  if (config_.linearization == Linearization::Invariant) {
+    // One variable, one anchor: one of the two is re-anchored to the other's, which links
+    // its neighbours to the robot. When neither fits in a local block even after a
+    // sparsification, drop's information is marginalised out instead of merged (exact, but
+    // its sightings' information is lost).
+    const auto fits = [&](int slot) {
+      return static_cast<int>(store_.robotLinks().size() + store_.node(slot).links.size()) < kMaxLocalLandmarks - 1;
+    };
+    if (!fits(d) && !fits(k)) sparsify();
+    if (fits(d)) {
+      store_.reanchorLandmark(d, store_.node(k).anchor);
+    } else if (fits(k)) {
+      store_.reanchorLandmark(k, store_.node(d).anchor);
+    } else {
+      removeLandmark(drop);
+      return;
+    }
   }
   store_.mergeLandmarks(k, d);
   book_.removeSlot(d);
@@ -279,10 +294,10 @@ Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars) const {
   return localMarginalCovariance(
       vars,
       [&](int v, std::vector<BlanketLink>& out) {
-        if (v < 0) {
+        if (v < 0) {  // H_{x,l}: the robot's side holds the robot-landmark blocks
           const Vec3 dx = diag(-1);
           for (const SeifStore::RobotLink& l : store_.robotLinks()) {
-            out.push_back({l.slot, linkStrength(dx, l.H, diag(l.slot).head<2>())});
+            out.push_back({l.slot, linkStrength(dx, l.H, diag(l.slot).head<2>()), l.H.data(), 3});
           }
           return;
         }
@@ -290,16 +305,15 @@ Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars) const {
         const SeifStore::Node& node = store_.node(v);
         if (node.active >= 0) {
           const Mat32& H = store_.robotLinks()[static_cast<std::size_t>(node.active)].H;
-          out.push_back({-1, linkStrength(diag(-1), H, dv)});
+          out.push_back({-1, linkStrength(diag(-1), H, dv), nullptr, 0});
         }
-        for (const SeifStore::Link& l : node.links) out.push_back({l.slot, linkStrength(dv, l.H, diag(l.slot).head<2>())});
+        for (const SeifStore::Link& l : node.links) {
+          out.push_back({l.slot, linkStrength(dv, l.H, diag(l.slot).head<2>()), l.H.data(), 2});
+        }
       },
-      [&](int a, int c) -> Eigen::MatrixXd {
-        if (a < 0 && c < 0) return store_.robotInformation();
-        if (a < 0) return store_.robotLinks()[static_cast<std::size_t>(store_.node(c).active)].H;
-        if (c < 0) return store_.robotLinks()[static_cast<std::size_t>(store_.node(a).active)].H.transpose();
-        if (a == c) return store_.node(a).H;
-        return *store_.findLink(a, c);
+      [&](int v) -> Eigen::MatrixXd {
+        if (v < 0) return store_.robotInformation();
+        return store_.node(v).H;
       },
       "seif (step " + std::to_string(store_.step()) + ")", static_cast<std::size_t>(options_.blanket));
 }

@@ -189,7 +189,10 @@ class SlamFilter {
   /// Merges landmark `drop` into `keep` when both turn out to be one landmark: the posterior
   /// conditioned on y_keep = y_drop (information form: H' = T^T H T, b' = T^T b, drop's rows
   /// and columns added into keep's), then `drop` leaves the map as removeLandmark() says.
-  /// keep's first estimate stays. Throws UnknownLandmark, InvalidArgument when keep == drop.
+  /// keep's first estimate stays. The invariant SEIF first re-anchors one of the two to the
+  /// other's anchor; when that would link the robot to more landmarks than its local block
+  /// holds, `drop` is removed (removeLandmark) instead. Throws UnknownLandmark,
+  /// InvalidArgument when keep == drop.
   virtual void mergeLandmarks(int keep, int drop) = 0;
 
   virtual Pose2 pose() const = 0;
