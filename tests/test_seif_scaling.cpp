@@ -141,6 +141,24 @@ TEST(SeifScaling, BenchCaseTimesTheEndOfTheCorridor) {
   EXPECT_LE(m.max_robot_links, 6u);
   EXPECT_GT(m.max_blocks_touched, 0u);
 
+  EXPECT_EQ(m.association, "known");
+  EXPECT_EQ(m.scans, 0u);
+
+  // With association: every scan of the window timed, the association scored.
+  c.association.method = AssociationMethod::NearestNeighbour;
+  c.association.marginal = MarginalMode::Local;
+  const BenchMeasurement a = runBenchCase(c);
+  EXPECT_EQ(a.association, "nn");
+  EXPECT_GT(a.scans, 150u);  // nearly every step of the corridor sees a landmark
+  EXPECT_LE(a.scans, a.steps);
+  EXPECT_GT(a.us_association_per_scan_median, 0.0);
+  EXPECT_GE(a.us_association_per_scan_p90, a.us_association_per_scan_median);
+  EXPECT_GE(a.us_association_per_scan_max, a.us_association_per_scan_p90);
+  EXPECT_GT(a.association_scored, 0u);
+  EXPECT_LE(a.association_correct, a.association_scored);
+  EXPECT_EQ(a.landmarks_final, a.map_last);
+
+  c.association = {};
   c.landmarks = 60;  // a corridor shorter than twice the window: half of it is timed
   EXPECT_EQ(runBenchCase(c).steps, 30u);
   c.filter = "nope";

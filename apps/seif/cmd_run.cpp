@@ -26,9 +26,7 @@ struct RunArgs {
   std::string checkpoint;
   std::string resume;
   bool smooth = false;
-  std::string association = "known";
-  std::string gate_marginal = "exact";
-  AssociationOptions assoc;
+  AssociationFlags association;
   std::string command_line;
 };
 
@@ -54,9 +52,7 @@ void run(const RunArgs& args) {
   request.iterations = flags.iterations;
   request.batch = flags.batch;
   request.smooth = args.smooth;
-  request.association = args.assoc;
-  request.association.method = parseAssociationMethod(args.association);
-  request.association.marginal = parseMarginalMode(args.gate_marginal);
+  request.association = args.association.resolve();
   request.map_covariances = args.map_covariance == "exact";
   request.trajectory_covariances = args.trajectory_covariance == "on";
   request.checkpoint_every = args.checkpoint_every;
@@ -124,7 +120,7 @@ void run(const RunArgs& args) {
     const AssociationCounts& a = *r.association;
     std::printf("  association %s: %zu observations; %zu of %zu with a truth id correct (%.2f %%), %zu wrong; "
                 "%zu without one (%zu matched to a labelled landmark)\n",
-                args.association.c_str(), a.observations, a.correct, a.scored,
+                args.association.method.c_str(), a.observations, a.correct, a.scored,
                 a.scored == 0 ? 0.0 : 100.0 * double(a.correct) / double(a.scored), a.wrong, a.unlabelled,
                 a.unlabelled_matched);
     std::printf("    %zu landmarks started, %zu provisional removed, %zu merged, %zu ambiguous dropped; %zu landmarks at "
@@ -209,39 +205,7 @@ void addRunCommand(CLI::App& app) {
                  "after the filter, the batch MAP from the filter's estimate (the batch's flags below\n"
                  "set its solver): the smoothed trajectory and map are the outputs, the filter's are written\n"
                  "beside them (trajectory_filter.tum, map_filter.csv) and compared in metrics.json");
-  cmd->add_option("--association", args->association,
-                  "data association: known (the dataset's landmark ids), nn (nearest neighbour: each\n"
-                  "observation its closest landmark inside the accept gate, greedily) or jcbb (joint\n"
-                  "compatibility branch and bound). With nn and jcbb the dataset's ids are hidden from the\n"
-                  "filter and only score the association (metrics.json \"association\"); docs/association.md")
-      ->check(CLI::IsMember({"known", "nn", "jcbb"}))
-      ->capture_default_str();
-  cmd->add_option("--accept-gate", args->assoc.accept,
-                  "chi-square probability (2 dof) inside which an observation may be a landmark")
-      ->check(CLI::Range(1e-6, 1.0 - 1e-12))
-      ->capture_default_str();
-  cmd->add_option("--new-gate", args->assoc.new_landmark,
-                  "chi-square probability beyond which an observation starts a new landmark (between the\n"
-                  "two gates it is dropped as ambiguous); >= --accept-gate")
-      ->check(CLI::Range(1e-6, 1.0 - 1e-12))
-      ->capture_default_str();
-  cmd->add_option("--gate-marginal", args->gate_marginal,
-                  "the covariance the gates use: exact (the marginal) or local (the Markov blanket's:\n"
-                  "constant time in the SEIF, smaller than the marginal)")
-      ->check(CLI::IsMember({"exact", "local"}))
-      ->capture_default_str();
-  cmd->add_option("--confirm", args->assoc.confirm,
-                  "a new landmark is provisional until seen this many times within --window scans;\n"
-                  "otherwise it is removed exactly (1: keep every new landmark)")
-      ->check(CLI::Range(1, 1000000))
-      ->capture_default_str();
-  cmd->add_option("--window", args->assoc.window, "scans (steps with observations) a provisional landmark has to be confirmed in")
-      ->check(CLI::Range(0, 1000000000))
-      ->capture_default_str();
-  cmd->add_option("--jcbb-nodes", args->assoc.jcbb_nodes,
-                  "most JCBB search nodes per scan; beyond, the best hypothesis found so far is used")
-      ->check(CLI::Range(1, 1000000000))
-      ->capture_default_str();
+  args->association.add(*cmd);
   args->noise.add(*cmd);
   args->options.add(*cmd, /*batch=*/true);
   cmd->callback([args] {

@@ -296,4 +296,49 @@ bool renderFigure(const std::string& script, const std::vector<std::string>& arg
 }
 
 
+void AssociationFlags::add(CLI::App& cmd, bool tuning) {
+  cmd.add_option("--association", method,
+                  "data association: known (the dataset's landmark ids), nn (nearest neighbour: each\n"
+                  "observation its closest landmark inside the accept gate, greedily) or jcbb (joint\n"
+                  "compatibility branch and bound). With nn and jcbb the dataset's ids are hidden from the\n"
+                  "filter and only score the association (metrics.json \"association\"); docs/association.md")
+      ->check(CLI::IsMember({"known", "nn", "jcbb"}))
+      ->capture_default_str();
+  cmd.add_option("--gate-marginal", marginal,
+                  "the covariance the gates use: exact (the marginal) or local (H inverted over a blanket\n"
+                  "around the pose and the candidates, at most seif:blanket variables more: constant time in\n"
+                  "the SEIF, smaller than the marginal)")
+      ->check(CLI::IsMember({"exact", "local"}))
+      ->capture_default_str();
+  if (!tuning) return;
+  cmd.add_option("--accept-gate", options.accept,
+                  "chi-square probability (2 dof) inside which an observation may be a landmark")
+      ->check(CLI::Range(1e-6, 1.0 - 1e-12))
+      ->capture_default_str();
+  cmd.add_option("--new-gate", options.new_landmark,
+                  "chi-square probability beyond which an observation starts a new landmark (between the\n"
+                  "two gates it is dropped as ambiguous); >= --accept-gate")
+      ->check(CLI::Range(1e-6, 1.0 - 1e-12))
+      ->capture_default_str();
+  cmd.add_option("--confirm", options.confirm,
+                  "a new landmark is provisional until seen this many times within --window scans;\n"
+                  "otherwise it is removed exactly (1: keep every new landmark)")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  cmd.add_option("--window", options.window, "scans (steps with observations) a provisional landmark has to be confirmed in")
+      ->check(CLI::Range(0, 1000000000))
+      ->capture_default_str();
+  cmd.add_option("--jcbb-nodes", options.jcbb_nodes,
+                  "most JCBB search nodes per scan; beyond, the best hypothesis found so far is used")
+      ->check(CLI::Range(1, 1000000000))
+      ->capture_default_str();
+}
+
+AssociationOptions AssociationFlags::resolve() const {
+  AssociationOptions o = options;
+  o.method = parseAssociationMethod(method);
+  o.marginal = parseMarginalMode(marginal);
+  return o;
+}
+
 }  // namespace seif::cli

@@ -1,5 +1,6 @@
 #pragma once
 // Option groups shared by the commands that run filters.
+#include <seif/filters/association.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/io/event_source.hpp>
@@ -65,6 +66,17 @@ struct FilterFlags {
   void add(CLI::App& cmd, bool batch = false);
   /// The flags as a spec's defaults (name "seif").
   FilterSpec resolve() const;
+};
+
+/// Data association's flags (--association, the gates, --gate-marginal, --confirm, --window,
+/// --jcbb-nodes), shared by run and bench.
+struct AssociationFlags {
+  std::string method = "known";
+  std::string marginal = "exact";
+  AssociationOptions options;
+  /// Without `tuning` only --association and --gate-marginal (the rest at their defaults).
+  void add(CLI::App& cmd, bool tuning = true);
+  AssociationOptions resolve() const;
 };
 
 /// The keys a filter spec takes, for --filter's help (from filterOptions()).

@@ -417,7 +417,8 @@ void bindBench(py::module_& m) {
       .def_readwrite("seed", &BenchCase::seed)
       .def_readwrite("seif", &BenchCase::seif)
       .def_readwrite("linearization", &BenchCase::linearization)
-      .def_readwrite("iterations", &BenchCase::iterations);
+      .def_readwrite("iterations", &BenchCase::iterations)
+      .def_readwrite("association", &BenchCase::association, "known, or nn/jcbb with the corridor's ids hidden");
   py::class_<BenchMeasurement>(m, "BenchMeasurement", "Times in microseconds, memory in MiB.")
       .def_readonly("filter", &BenchMeasurement::filter)
       .def_readonly("landmarks", &BenchMeasurement::landmarks)
@@ -440,7 +441,15 @@ void bindBench(py::module_& m) {
       .def_readonly("data_rss_mb", &BenchMeasurement::data_rss_mb)
       .def_readonly("filter_peak_mb", &BenchMeasurement::filter_peak_mb)
       .def_readonly("filter_final_mb", &BenchMeasurement::filter_final_mb)
-      .def_readonly("peak_reset", &BenchMeasurement::peak_reset);
+      .def_readonly("peak_reset", &BenchMeasurement::peak_reset)
+      .def_readonly("association", &BenchMeasurement::association)
+      .def_readonly("scans", &BenchMeasurement::scans)
+      .def_readonly("us_association_per_scan_median", &BenchMeasurement::us_association_per_scan_median)
+      .def_readonly("us_association_per_scan_p90", &BenchMeasurement::us_association_per_scan_p90)
+      .def_readonly("us_association_per_scan_max", &BenchMeasurement::us_association_per_scan_max)
+      .def_readonly("association_scored", &BenchMeasurement::association_scored)
+      .def_readonly("association_correct", &BenchMeasurement::association_correct)
+      .def_readonly("landmarks_final", &BenchMeasurement::landmarks_final);
   m.def("run_bench_case", &runBenchCase, py::arg("case"), py::call_guard<py::gil_scoped_release>(),
         "Measures one case in this process (the Python interpreter's memory counts in the RSS figures).");
   m.def("quantile", &quantile, py::arg("values"), py::arg("q"));

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -128,9 +129,25 @@ BenchMeasurement runBenchCase(const BenchCase& c) {
   filter_config.iterations = c.iterations;
   auto filter = makeFilter(c.filter, start, filter_config, c.seif);
   WindowTimer timer(first, m, us, observations);
+  // Association, timed per scan in the window (the filter's step time excludes it).
+  std::optional<Associator> associator;
+  std::vector<double> association_us;
+  RunLoopOptions loop;
+  m.association = std::string(associationMethodName(c.association.method));
+  if (c.association.method != AssociationMethod::Known) {
+    associator.emplace(c.association);
+    association_us.reserve(window);
+    loop.associate = [&](SlamFilter& f, const Step&, std::size_t k, std::vector<Observation>& z) {
+      const bool scan = !z.empty();
+      const auto t0 = Clock::now();
+      associator->associate(f, k, z);
+      if (k >= first && scan) association_us.push_back(1e6 * std::chrono::duration<double>(Clock::now() - t0).count());
+    };
+  }
   const auto t_run = Clock::now();
   try {
-    runLoop(*filter, data, {&timer});
+    runLoop(*filter, data, {&timer}, loop);
+    if (associator) associator->finish(*filter);
   } catch (const std::exception& e) {
     throw NumericError(c.filter + " on the corridor of " + std::to_string(c.landmarks) + " landmarks: " + e.what());
   }
@@ -138,6 +155,16 @@ BenchMeasurement runBenchCase(const BenchCase& c) {
   m.steps = us.size();
   m.steps_run = total;
   m.map_last = filter->landmarkIds().size();
+  if (associator) {
+    const AssociationCounts& counts = associator->counts();
+    m.scans = association_us.size();
+    m.us_association_per_scan_median = quantile(association_us, 0.5);
+    m.us_association_per_scan_p90 = quantile(association_us, 0.9);
+    m.us_association_per_scan_max = association_us.empty() ? 0.0 : *std::max_element(association_us.begin(), association_us.end());
+    m.association_scored = counts.scored;
+    m.association_correct = counts.correct;
+    m.landmarks_final = counts.landmarks_final;
+  }
   if (!us.empty()) {
     m.us_per_step_median = quantile(us, 0.5);
     m.us_per_step_p90 = quantile(us, 0.9);

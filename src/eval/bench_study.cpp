@@ -97,7 +97,15 @@ nlohmann::json measurementJson(const BenchMeasurement& m) {
           {"max_blocks_touched", m.max_blocks_touched},
           {"max_robot_links", m.max_robot_links},
           {"sim_seconds", m.sim_seconds},
-          {"run_seconds", m.run_seconds}};
+          {"run_seconds", m.run_seconds},
+          {"association", m.association},
+          {"scans", m.scans},
+          {"us_association_per_scan_median", m.us_association_per_scan_median},
+          {"us_association_per_scan_p90", m.us_association_per_scan_p90},
+          {"us_association_per_scan_max", m.us_association_per_scan_max},
+          {"association_scored", m.association_scored},
+          {"association_correct", m.association_correct},
+          {"landmarks_final", m.landmarks_final}};
 }
 
 BenchMeasurement measurementFromJson(const nlohmann::json& j) {
@@ -124,6 +132,14 @@ BenchMeasurement measurementFromJson(const nlohmann::json& j) {
   m.max_robot_links = j.at("max_robot_links").get<std::size_t>();
   m.sim_seconds = j.at("sim_seconds").get<double>();
   m.run_seconds = j.at("run_seconds").get<double>();
+  m.association = j.at("association").get<std::string>();
+  m.scans = j.at("scans").get<std::size_t>();
+  m.us_association_per_scan_median = j.at("us_association_per_scan_median").get<double>();
+  m.us_association_per_scan_p90 = j.at("us_association_per_scan_p90").get<double>();
+  m.us_association_per_scan_max = j.at("us_association_per_scan_max").get<double>();
+  m.association_scored = j.at("association_scored").get<std::size_t>();
+  m.association_correct = j.at("association_correct").get<std::size_t>();
+  m.landmarks_final = j.at("landmarks_final").get<std::size_t>();
   return m;
 }
 
@@ -325,6 +341,7 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
       c.seif = args.seif;
       c.linearization = args.linearization;
       c.iterations = args.iterations;
+      c.association = args.association;
       BenchRow row;
       row.filter = filter;
       row.landmarks = n;
@@ -374,6 +391,11 @@ BenchTargets benchTargets(const std::vector<BenchMeasurement>& all) {
     const double ratio = hi.us_per_step_median / lo.us_per_step_median;
     t.seif_growth = BenchTargets::Growth{lo.landmarks, hi.landmarks, lo.us_per_step_median, hi.us_per_step_median,
                                          ratio, ratio <= 1.5};
+    if (lo.scans > 0 && hi.scans > 0) {
+      const double a = hi.us_association_per_scan_median / lo.us_association_per_scan_median;
+      t.seif_association_growth = BenchTargets::Growth{lo.landmarks, hi.landmarks, lo.us_association_per_scan_median,
+                                                       hi.us_association_per_scan_median, a, a <= 1.5};
+    }
   }
   int common = 0;
   for (const BenchMeasurement& m : all) {
@@ -419,6 +441,14 @@ std::string benchJson(const BenchReport& report) {
                               {"target", "<= 1.5"},
                               {"met", t.seif_growth->met}};
   }
+  if (t.seif_association_growth) {
+    const auto& g = *t.seif_association_growth;
+    targets["seif_association_growth"] = {{"from_landmarks", g.from_landmarks},
+                                          {"to_landmarks", g.to_landmarks},
+                                          {"ratio", g.ratio},
+                                          {"target", "<= 1.5"},
+                                          {"met", g.met}};
+  }
   if (t.ekf_over_seif) {
     targets["ekf_over_seif"] = {{"landmarks", t.ekf_over_seif->landmarks},
                                 {"ratio", t.ekf_over_seif->ratio},
@@ -440,7 +470,9 @@ std::string benchJson(const BenchReport& report) {
                                  {"max_memory_gb", args.max_memory_gb},
                                  {"linearization", linearizationName(args.linearization)},
                                  {"iterations", args.iterations},
-                                 {"seif", toJson(args.seif)}};
+                                 {"seif", toJson(args.seif)},
+                                 {"association", associationMethodName(args.association.method)},
+                                 {"gate_marginal", marginalModeName(args.association.marginal)}};
   const nlohmann::json doc = {{"machine", machineJson()},
                               {"config", config},
                               {"results", results},

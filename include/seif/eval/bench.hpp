@@ -6,6 +6,7 @@
 //
 // runBenchCase() measures one case in the calling process; runBench() runs the whole study,
 // each case in a forked child so that the peak memory of one case does not leak into the next.
+#include <seif/filters/association.hpp>
 #include <seif/filters/seif_options.hpp>
 #include <seif/filters/slam_filter.hpp>
 
@@ -32,6 +33,9 @@ struct BenchCase {
   Linearization linearization = Linearization::Standard;
   int iterations = 1;
   SeifOptions seif;        ///< used when filter == "seif"
+  /// known: the corridor's ids. nn | jcbb: the ids hidden, each scan associated (and timed)
+  /// by an Associator with these options.
+  AssociationOptions association;
 };
 
 /// What one case measured. Times in microseconds, memory in MiB (2^20 bytes).
@@ -67,6 +71,17 @@ struct BenchMeasurement {
   /// Whether the kernel let the peak be reset after the dataset was built
   /// (/proc/self/clear_refs, Linux >= 4.0); without it filter_peak_mb is not isolated.
   bool peak_reset = false;
+  /// With association (BenchCase::association): its method, the window's scans (steps with
+  /// observations), the time the Associator took per scan, and its score over the whole run
+  /// (AssociationCounts: scored observations, correct, landmarks at the end).
+  std::string association = "known";
+  std::size_t scans = 0;
+  double us_association_per_scan_median = 0.0;
+  double us_association_per_scan_p90 = 0.0;
+  double us_association_per_scan_max = 0.0;
+  std::size_t association_scored = 0;
+  std::size_t association_correct = 0;
+  std::size_t landmarks_final = 0;
 };
 
 /// Simulates the corridor world with c.landmarks landmarks (presetConfig(Corridor, N, 0,
@@ -145,6 +160,7 @@ struct BenchRequest {
   Linearization linearization = Linearization::Standard;
   int iterations = 1;
   SeifOptions seif;
+  AssociationOptions association;  ///< BenchCase::association, for every case
 };
 
 /// One (filter, N) of the study.
@@ -158,7 +174,7 @@ struct BenchRow {
 };
 
 /// The targets, from what was measured: the SEIF's median at the largest N within
-/// 1.5x its median at the smallest; the SEIF at least 100x faster than the EKF at 1000
+/// 1.5x its median at the smallest (and so its association time per scan, when associating); the SEIF at least 100x faster than the EKF at 1000
 /// landmarks (else at the largest N both ran); the SEIF's bytes per landmark.
 struct BenchTargets {
   struct Growth {
@@ -172,6 +188,8 @@ struct BenchTargets {
     bool met = false;
   };
   std::optional<Growth> seif_growth;
+  /// With association: the SEIF's median association time per scan, largest N over smallest.
+  std::optional<Growth> seif_association_growth;
   std::optional<Speedup> ekf_over_seif;
   std::vector<std::pair<int, double>> seif_bytes_per_landmark;  ///< (N, bytes)
 };
