@@ -232,7 +232,7 @@ void bindSlamFilter(py::module_& m) {
   using Columns = Eigen::Matrix<double, Eigen::Dynamic, 2>;
   py::enum_<MarginalMode>(m, "MarginalMode", "How a marginal is computed (SlamFilter.marginal)")
       .value("Exact", MarginalMode::Exact, "the posterior's marginal")
-      .value("Local", MarginalMode::Local, "from the queried variables' Markov blanket (never larger than Exact)");
+      .value("Local", MarginalMode::Local, "from a blanket around the queried variables (never larger than Exact)");
 
   py::class_<SlamFilter>(m, "SlamFilter",
                          "The interface of every filter (EKF, EIF, SEIF, batch MAP). Build one with make_filter().\n"
@@ -287,8 +287,8 @@ void bindSlamFilter(py::module_& m) {
           },
           py::arg("landmark_ids"), py::arg("pose") = true, py::arg("mode") = MarginalMode::Exact,
           "(mean, covariance) of the pose (when `pose`) and the landmarks `landmark_ids`, in that order. "
-          "Exact: the posterior's marginal; Local: from the Markov blanket, constant time in the SEIF, "
-          "never larger than Exact. Raises UnknownLandmark.")
+          "Exact: the posterior's marginal; Local: H inverted over a blanket around them (the SEIF's "
+          "bounded by SeifOptions.blanket: constant time), never larger than Exact. Raises UnknownLandmark.")
       .def("remove_landmark", &SlamFilter::removeLandmark, py::arg("id"),
            "Takes the landmark out of the map exactly (its marginal out of the posterior).")
       .def("merge_landmarks", &SlamFilter::mergeLandmarks, py::arg("keep"), py::arg("drop"),

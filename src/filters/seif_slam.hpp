@@ -106,8 +106,8 @@ class SeifSlam final : public SlamFilter {
   void measurementUpdate(std::span<const Observation> z,
                          const MeasurementModel& sensor);  ///< §3, eq. (21-22)
   void sparsify();                                         ///< §4, eq. (44-51)
-  /// The joint covariance of `vars` (-1: the robot, else slots) from H restricted to their
-  /// Markov blanket (MarginalMode::Local).
+  /// The joint covariance of `vars` (-1: the robot, else slots) from H restricted to a
+  /// blanket around them of at most options_.blanket more variables (MarginalMode::Local).
   Eigen::MatrixXd localCovariance(std::span<const int> vars) const;
   Eigen::MatrixXd localCovariance(std::initializer_list<int> vars) const;
   /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).

@@ -35,7 +35,8 @@ struct AssociationOptions {
   /// every landmark starts a new one; between the gates it is dropped as ambiguous.
   double new_landmark = 0.9999;
   /// The covariance the gates use (SlamFilter::marginal): Exact, or Local (constant time in
-  /// the SEIF; conditions on the blanket's outside, so it is smaller than the marginal).
+  /// the SEIF, its blanket bounded by SeifOptions::blanket; conditions on the blanket's
+  /// outside, so it is never larger than the marginal).
   MarginalMode marginal = MarginalMode::Exact;
   /// A new landmark stays provisional until it has been seen `confirm` times (its first
   /// sighting included) within `window` scans (steps with observations) of its first;

@@ -43,8 +43,7 @@ struct SeifOptions {
   /// Cholesky factor of H and its selected inverse, one factorisation per changed H (O(N)
   /// at the paper's sparsity, cached: every marginal of one state costs it once). Local: the
   /// inverse of H restricted to a blanket around the variable (`blanket`), O(1): it
-  /// conditions on everything outside,
-  /// so it is smaller than the marginal - an approximation for display, not for gating.
+  /// conditions on everything outside, so it is never larger than the marginal.
   Covariance covariance = Covariance::Exact;
   /// The blanket of a local marginal (MarginalMode::Local, Covariance::Local): at most this
   /// many variables besides the queried ones, grown from them along the strongest links

@@ -86,9 +86,10 @@ struct FilterStats {
 enum class MarginalMode {
   /// The posterior's marginal.
   Exact,
-  /// The inverse of the information restricted to the queried variables and every variable
-  /// linked to one of them (their Markov blanket): conditions on the rest, so never larger
-  /// than Exact. Constant time in the SEIF.
+  /// The inverse of the information restricted to the queried variables and a blanket
+  /// around them: conditions on the rest, so never larger than Exact. The EIF's blanket is
+  /// the Markov blanket (every variable linked to a queried one); the SEIF's grows along the
+  /// strongest links up to SeifOptions::blanket variables, so it is constant time.
   Local,
 };
 
@@ -163,12 +164,13 @@ class SlamFilter {
   ///   EIF   Exact: solves with its cached dense factor, O(N^2) per variable (one O(N^3)
   ///         factorisation per state). Local: a dense inverse of the blanket, O(b^3).
   ///   SEIF  Exact: solves with its cached sparse factor, O(nnz(L)) per column (one sparse
-  ///         factorisation per state). Local: O(b^3), b the size of the blanket: constant
-  ///         time at the SEIF's bounded degrees.
+  ///         factorisation per state). Local: O(b^3), b <= k + SeifOptions::blanket the
+  ///         size of the blanket: constant time.
   ///   batch Exact (Local is Exact): solves with the KKT factor after finish(); before it
   ///         the initial guess's (an EKF's).
-  /// Local conditions on everything outside the queried variables' Markov blanket, so it is
-  /// never larger than the marginal (overconfident: for display, not for gating).
+  /// Local conditions on everything outside the blanket, so it is never larger than the
+  /// marginal. On the simulated worlds the SEIF's local S of a measurement is within 6 % of
+  /// the exact one at the median, and rejects as many true pairings (docs/association.md).
   /// Throws UnknownLandmark for an id not in the map.
   virtual Marginal marginal(std::span<const int> landmarks, bool pose = true,
                             MarginalMode mode = MarginalMode::Exact) const = 0;
