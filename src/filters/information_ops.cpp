@@ -7,7 +7,6 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <queue>
-#include <unordered_map>
 #include <cmath>
 #include <string>
 
