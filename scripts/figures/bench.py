@@ -7,7 +7,8 @@ Reads bench.json (written by `seif bench`) and writes OUT.png (default: bench.pn
 bench.json) with two panels:
 
   left   median time per filter step against N, one line per filter, the band between the
-         median and the 90th percentile shaded; cases the benchmark skipped (they would not
+         median and the 90th percentile shaded (with `--association`, the median association
+         time per scan dashed); cases the benchmark skipped (they would not
          fit the memory or time budget) are marked with an x at the top of the axis
   right  the filter's own peak memory per mapped landmark against N (bounded for the SEIF,
          growing like N for the dense filters)
@@ -63,6 +64,11 @@ def main(argv):
             p90 = [r["us_per_step_p90"] for r in done]
             ax_t.plot(n, med, label=label, **style)
             ax_t.fill_between(n, med, p90, color=style.get("color"), alpha=0.15, linewidth=0)
+            assoc = [r for r in done if r.get("scans", 0) > 0]
+            if assoc:  # `seif bench --association`: the association per scan, dashed
+                ax_t.plot([r["landmarks"] for r in assoc], [r["us_association_per_scan_median"] for r in assoc],
+                          linestyle="--", label=f"{label}: association per scan ({assoc[0]['association']})",
+                          **style)
             per = [(r["landmarks"], 1024 * 1024 * r["mb_per_landmark"]) for r in done
                    if r.get("mb_per_landmark", 0) > 0]
             if per:
