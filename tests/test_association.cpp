@@ -123,7 +123,7 @@ AssociationCounts parkWithClutter(const std::string& filter, AssociationMethod m
   auto f = makeFilter(filter, startPose(data), config);
   AssociationOptions o;
   o.method = method;
-  o.marginal = filter == "seif" ? MarginalMode::Local : MarginalMode::Exact;
+  o.marginal = filter.rfind("seif", 0) == 0 ? MarginalMode::Local : MarginalMode::Exact;
   Associator a(o);
   RunLoopOptions loop;
   loop.associate = [&](SlamFilter& filt, const Step&, std::size_t k, std::vector<Observation>& z) { a.associate(filt, k, z); };
@@ -154,5 +154,22 @@ TEST(Association, NearestNeighbourAndJcbbOnTheParkWithClutter) {
       EXPECT_LE(c.duplicate_landmarks, 3u) << filter;
       EXPECT_LT(rmse, 0.4) << filter;
     }
+  }
+}
+
+TEST(Association, TheRecommendedSeifOnTheParkWithClutter) {
+  // seif:profile=consistent with its constant-time gates (the bounded blanket): every seed of
+  // the README's five-seed study was >= 99.19 % correct; seed 2 is the worst of them.
+  for (AssociationMethod method : {AssociationMethod::NearestNeighbour, AssociationMethod::Jcbb}) {
+    double rmse = 0.0;
+    const AssociationCounts c = parkWithClutter("seif:profile=consistent", method, 2, &rmse);
+    const double correct = static_cast<double>(c.correct) / static_cast<double>(c.scored);
+    std::printf("seif:profile=consistent %s: %.4f correct of %zu, %zu landmarks (%zu spurious, %zu duplicates), map %.3f m\n",
+                std::string(associationMethodName(method)).c_str(), correct, c.scored, c.landmarks_final,
+                c.spurious_landmarks, c.duplicate_landmarks, rmse);
+    EXPECT_GE(correct, 0.99);
+    EXPECT_LE(c.spurious_landmarks, 3u);
+    EXPECT_LE(c.duplicate_landmarks, 3u);
+    EXPECT_LT(rmse, 0.4);
   }
 }
