@@ -350,17 +350,9 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   for (std::size_t i = 0; i < observations.size(); ++i) {
     const Mat2 R = sensor.noise(observations[i]);
     for (int id : found[i]) {
-      const Eigen::Index c = scan.column.at(id);
-      Mat23 J_x;
-      Mat2 J_y;
-      const Vec2 zhat = sensor.predict(scan.joint.mean.head<3>(), scan.joint.mean.segment<2>(c), &J_x, &J_y);
-      // S = J P J^T + R with J = [J_x J_y] over the pose's and this landmark's blocks of P
-      const Eigen::MatrixXd& P = scan.joint.covariance;
-      const Mat23 JP_x = J_x * P.topLeftCorner<3, 3>() + J_y * P.block<2, 3>(c, 0);
-      const Mat2 JP_y = J_x * P.block<3, 2>(0, c) + J_y * P.block<2, 2>(c, c);
-      const Mat2 S = JP_x * J_x.transpose() + JP_y * J_y.transpose() + R;
-      const Vec2 nu = sensor.residual(observations[i].z, zhat);
-      const Eigen::LLT<Mat2> llt(0.5 * (S + S.transpose()));
+      const PredictedMeasurement pm = predictFromMarginal(sensor, scan.joint, scan.column.at(id), R);
+      const Vec2 nu = sensor.residual(observations[i].z, pm.z);
+      const Eigen::LLT<Mat2> llt(pm.S);
       if (llt.info() != Eigen::Success) continue;
       const double d2 = nu.dot(llt.solve(nu));
       nearest[i] = std::min(nearest[i], d2);

@@ -11,7 +11,6 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
-#include <unordered_map>
 
 namespace seif {
 
@@ -56,17 +55,15 @@ class Search {
     candidates_.resize(m);
     // The scan's joint marginal of the pose and every candidate (association.cpp).
     const Marginal& joint = scan.joint;
-    const auto& column = scan.column;
-    const Pose2 x = joint.mean.size() >= 3 ? Pose2(joint.mean.head<3>()) : Pose2::Zero();
     for (std::size_t i = 0; i < m; ++i) {
       for (const Pairing& p : scan.compatible[i]) {
         Candidate c;
         c.pairing = p;
-        c.column = column.at(p.landmark);
+        c.column = scan.column.at(p.landmark);
         const Observation& z = (*scan.observations)[static_cast<std::size_t>(p.observation)];
-        const Vec2 zhat = scan.sensor->predict(x, joint.mean.segment<2>(c.column), &c.J_x, &c.J_y);
-        c.nu = scan.sensor->residual(z.z, zhat);
         c.R = scan.sensor->noise(z);
+        const PredictedMeasurement pm = predictFromMarginal(*scan.sensor, joint, c.column, c.R, &c.J_x, &c.J_y);
+        c.nu = scan.sensor->residual(z.z, pm.z);
         c.A = c.J_x * joint.covariance.topRows<3>() + c.J_y * joint.covariance.middleRows<2>(c.column);
         candidates_[i].push_back(std::move(c));
       }

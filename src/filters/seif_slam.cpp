@@ -287,29 +287,23 @@ Eigen::MatrixXd SeifSlam::localCovariance(std::initializer_list<int> vars) const
 Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars) const {
   // The blanket from the store's links: the robot's are the active landmarks; a landmark's
   // are its linked landmarks, and the robot when it is active. Bounded by options_.blanket.
-  const auto diag = [&](int v) -> Eigen::Vector3d {
-    if (v < 0) return store_.robotInformation().diagonal();
-    return Eigen::Vector3d(store_.node(v).H(0, 0), store_.node(v).H(1, 1), 0.0);
-  };
+  const Vec3 dx = store_.robotInformation().diagonal();
+  const auto dl = [&](int slot) -> Vec2 { return store_.node(slot).H.diagonal(); };
   return localMarginalCovariance(
       vars,
       [&](int v, std::vector<BlanketLink>& out) {
         if (v < 0) {  // H_{x,l}: the robot's side holds the robot-landmark blocks
-          const Vec3 dx = diag(-1);
           for (const SeifStore::RobotLink& l : store_.robotLinks()) {
-            out.push_back({l.slot, linkStrength(dx, l.H, diag(l.slot).head<2>()), l.H.data(), 3});
+            out.push_back({l.slot, linkStrength(dx, l.H, dl(l.slot)), l.H.data(), 3});
           }
           return;
         }
-        const Vec2 dv = diag(v).head<2>();
         const SeifStore::Node& node = store_.node(v);
         if (node.active >= 0) {
           const Mat32& H = store_.robotLinks()[static_cast<std::size_t>(node.active)].H;
-          out.push_back({-1, linkStrength(diag(-1), H, dv), nullptr, 0});
+          out.push_back({-1, linkStrength(dx, H, dl(v)), nullptr, 0});
         }
-        for (const SeifStore::Link& l : node.links) {
-          out.push_back({l.slot, linkStrength(dv, l.H, diag(l.slot).head<2>()), l.H.data(), 2});
-        }
+        for (const SeifStore::Link& l : node.links) out.push_back({l.slot, linkStrength(dl(v), l.H, dl(l.slot)), l.H.data(), 2});
       },
       [&](int v) -> Eigen::MatrixXd {
         if (v < 0) return store_.robotInformation();

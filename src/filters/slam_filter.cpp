@@ -58,20 +58,28 @@ Eigen::Matrix<double, Eigen::Dynamic, 2> SlamFilter::landmarkCovarianceColumns(i
   return covariance().middleCols<2>(3 + 2 * (it - ids.begin()));
 }
 
-PredictedMeasurement SlamFilter::predictMeasurement(int id, const MeasurementModel& sensor, const Mat2& R,
-                                                   MarginalMode mode) const {
-  const int ids[1] = {id};
-  const Marginal m = marginal(ids, true, mode);
-  // S = J P J^T + R with J = [J_x J_y] over the joint marginal P of pose and landmark.
-  Eigen::Matrix<double, 2, 5> J;
+PredictedMeasurement predictFromMarginal(const MeasurementModel& sensor, const Marginal& joint,
+                                         Eigen::Index landmark_row, const Mat2& R, Mat23* J_x_out, Mat2* J_y_out) {
+  const Eigen::Index c = landmark_row;
   Mat23 J_x;
   Mat2 J_y;
   PredictedMeasurement p;
-  p.z = sensor.predict(m.mean.head<3>(), m.mean.tail<2>(), &J_x, &J_y);
-  J << J_x, J_y;
-  p.S = J * m.covariance * J.transpose() + R;
-  p.S = (0.5 * (p.S + p.S.transpose())).eval();
+  p.z = sensor.predict(joint.mean.head<3>(), joint.mean.segment<2>(c), &J_x, &J_y);
+  // S = J P J^T + R with J = [J_x J_y] over the pose's and the landmark's blocks of P
+  const Eigen::MatrixXd& P = joint.covariance;
+  const Mat23 JP_x = J_x * P.topLeftCorner<3, 3>() + J_y * P.block<2, 3>(c, 0);
+  const Mat2 JP_y = J_x * P.block<3, 2>(0, c) + J_y * P.block<2, 2>(c, c);
+  const Mat2 S = JP_x * J_x.transpose() + JP_y * J_y.transpose() + R;
+  p.S = 0.5 * (S + S.transpose());
+  if (J_x_out) *J_x_out = J_x;
+  if (J_y_out) *J_y_out = J_y;
   return p;
+}
+
+PredictedMeasurement SlamFilter::predictMeasurement(int id, const MeasurementModel& sensor, const Mat2& R,
+                                                   MarginalMode mode) const {
+  const int ids[1] = {id};
+  return predictFromMarginal(sensor, marginal(ids, true, mode), 3, R);
 }
 
 std::vector<Eigen::Index> SlamFilter::stateIndices(std::span<const int> slots, bool pose) {

@@ -110,6 +110,13 @@ struct PredictedMeasurement {
   Mat2 S = Mat2::Zero();
 };
 
+/// The same from a joint marginal already at hand (one query serving many landmarks): the
+/// pose in its first 3 rows, the landmark's 2 rows from `landmark_row`; J = [J_x J_y] is
+/// returned through J_x and J_y when given.
+PredictedMeasurement predictFromMarginal(const MeasurementModel& sensor, const Marginal& joint,
+                                         Eigen::Index landmark_row, const Mat2& R, Mat23* J_x = nullptr,
+                                         Mat2* J_y = nullptr);
+
 class SlamFilter {
  public:
   explicit SlamFilter(const FilterConfig& config);
