@@ -349,3 +349,30 @@ TEST(Cli, NoiseValuesResolveRequiresFinitePositiveSigmas) {
   options.noise["sigma_nope"] = 1.0;
   EXPECT_THROW(seif::checkNoiseNames(options, {"sigma_v"}, "mrclam"), seif::InvalidArgument);
 }
+
+TEST(Cli, AssociationOnAClutteredWorld) {
+  // Known association refuses a false detection and says how to go on; --drop-unlabelled
+  // runs the known-association reference; nn with provisional landmarks held outside the
+  // filter scores itself against the simulator's truth.
+  const auto dir = scratchDir("association-run");
+  ASSERT_EQ(runCli("simulate --preset park --steps 1500 --seed 3 --clutter 1 --detection-probability 0.9 --out " +
+                   (dir / "W").string()).status, 0);
+  const std::string data = " --dataset " + (dir / "W").string();
+  const auto refused = runCli("run" + data + " --filter ekf --out " + (dir / "K0").string());
+  EXPECT_NE(refused.status, 0);
+  EXPECT_NE(refused.err.find("--drop-unlabelled"), std::string::npos) << refused.err;
+  const auto known = runCli("run" + data + " --filter ekf --drop-unlabelled --out " + (dir / "K").string());
+  ASSERT_EQ(known.status, 0) << known.err;
+  const auto k = readJson(dir / "K" / "metrics.json");
+  EXPECT_EQ(k["association"]["method"], "known");
+  EXPECT_GT(k["association"]["unlabelled_dropped"].get<int>(), 0);
+  const auto nn = runCli("run" + data + " --filter seif --association nn --gate-marginal local --provisional held --out " +
+                         (dir / "N").string());
+  ASSERT_EQ(nn.status, 0) << nn.err;
+  const auto n = readJson(dir / "N" / "metrics.json");
+  EXPECT_EQ(n["association"]["provisional"], "held");
+  EXPECT_GT(n["association"]["correct_fraction"].get<double>(), 0.98);
+  EXPECT_GT(n["association"]["provisional_removed"].get<int>(), 0);
+  EXPECT_EQ(runCli("run" + data + " --filter ekf --association nn --provisional elsewhere --out " + (dir / "X").string()).status, 1);
+  std::filesystem::remove_all(dir);
+}

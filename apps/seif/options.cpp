@@ -85,8 +85,8 @@ CLI::Validator seedValue() {
 void addDetectionFlags(CLI::App& cmd, double& clutter, double& detection_probability) {
   cmd.add_option("--clutter", clutter,
                  "mean number of false detections per scan (Poisson, uniform in the sensor's footprint);\n"
-                 "they are observations of no landmark: a filter with known data association stops at\n"
-                 "the first one (docs/simulator.md)")
+                 "they are observations of no landmark: run them with --association nn|jcbb, or with\n"
+                 "known association and --drop-unlabelled (docs/simulator.md)")
       ->check([](const std::string& s) -> std::string {
         const auto v = parseAll<double>(s);
         if (!v || !std::isfinite(*v) || *v < 0.0) return "must be finite and >= 0, found " + s;
@@ -325,6 +325,15 @@ void AssociationFlags::add(CLI::App& cmd, bool tuning) {
                   "otherwise it is removed exactly (1: keep every new landmark)")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
+  cmd.add_option("--provisional", provisional,
+                  "where a provisional landmark lives: filter (in the filter from its first sighting, removed\n"
+                  "exactly if not confirmed) or held (outside it, its own small estimate, entering the filter\n"
+                  "at its confirming sighting: clutter never enters the filter)")
+      ->check(CLI::IsMember({"filter", "held"}))
+      ->capture_default_str();
+  cmd.add_flag("--drop-unlabelled", options.drop_unlabelled,
+               "with --association known: drop the observations without a landmark id (a simulated world's\n"
+               "clutter) instead of refusing them; metrics.json counts them (association.unlabelled_dropped)");
   cmd.add_option("--window", options.window, "scans (steps with observations) a provisional landmark has to be confirmed in")
       ->check(CLI::Range(0, 1000000000))
       ->capture_default_str();
@@ -338,6 +347,7 @@ AssociationOptions AssociationFlags::resolve() const {
   AssociationOptions o = options;
   o.method = parseAssociationMethod(method);
   o.marginal = parseMarginalMode(marginal);
+  o.provisional = parseProvisionalPlace(provisional);
   return o;
 }
 

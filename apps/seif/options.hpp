@@ -68,11 +68,12 @@ struct FilterFlags {
   FilterSpec resolve() const;
 };
 
-/// Data association's flags (--association, the gates, --gate-marginal, --confirm, --window,
-/// --jcbb-nodes), shared by run and bench.
+/// Data association's flags (--association, the gates, --gate-marginal, --confirm,
+/// --provisional, --window, --jcbb-nodes), shared by run and bench.
 struct AssociationFlags {
   std::string method = "known";
   std::string marginal = "exact";
+  std::string provisional = "filter";
   AssociationOptions options;
   /// Without `tuning` only --association and --gate-marginal (the rest at their defaults).
   void add(CLI::App& cmd, bool tuning = true);

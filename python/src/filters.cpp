@@ -386,6 +386,10 @@ void bindAssociation(py::module_& m) {
       .value("Known", AssociationMethod::Known)
       .value("NearestNeighbour", AssociationMethod::NearestNeighbour)
       .value("Jcbb", AssociationMethod::Jcbb);
+  bindNamedEnum<ProvisionalPlace>(m, "ProvisionalPlace", "'filter' | 'held' (filters/association.hpp)",
+                                  &parseProvisionalPlace, &provisionalPlaceName)
+      .value("Filter", ProvisionalPlace::Filter)
+      .value("Held", ProvisionalPlace::Held);
   py::class_<AssociationOptions>(m, "AssociationOptions",
                                  "Data association's options (filters/association.hpp; `seif run --association`)")
       .def(py::init<>())
@@ -395,12 +399,15 @@ void bindAssociation(py::module_& m) {
       .def_readwrite("marginal", &AssociationOptions::marginal, "MarginalMode the gates use")
       .def_readwrite("confirm", &AssociationOptions::confirm, "sightings that confirm a provisional landmark")
       .def_readwrite("window", &AssociationOptions::window, "scans it has to be confirmed in")
+      .def_readwrite("provisional", &AssociationOptions::provisional, "ProvisionalPlace: in the filter or held outside it")
+      .def_readwrite("drop_unlabelled", &AssociationOptions::drop_unlabelled,
+                     "known: drop observations without a landmark id instead of refusing them")
       .def_readwrite("merge", &AssociationOptions::merge, "chi-square probability of the correspondence test (0: never)")
       .def_readwrite("jcbb_nodes", &AssociationOptions::jcbb_nodes)
       .def_readwrite("refresh", &AssociationOptions::refresh)
       .def_readwrite("slack", &AssociationOptions::slack)
       .def("__repr__", [](py::handle s) {
-        return reprOf(s, {"method", "accept", "new_landmark", "marginal", "confirm", "window", "merge"});
+        return reprOf(s, {"method", "accept", "new_landmark", "marginal", "confirm", "window", "provisional", "merge"});
       });
   py::class_<AssociationCounts>(m, "AssociationCounts", "What an association did, scored against Observation.truth")
       .def_readonly("observations", &AssociationCounts::observations)
@@ -412,6 +419,7 @@ void bindAssociation(py::module_& m) {
       .def_readonly("in_removed_landmarks", &AssociationCounts::in_removed_landmarks)
       .def_readonly("new_landmarks", &AssociationCounts::new_landmarks)
       .def_readonly("ambiguous_dropped", &AssociationCounts::ambiguous_dropped)
+      .def_readonly("unlabelled_dropped", &AssociationCounts::unlabelled_dropped)
       .def_readonly("provisional_removed", &AssociationCounts::provisional_removed)
       .def_readonly("provisional_final", &AssociationCounts::provisional_final)
       .def_readonly("merged", &AssociationCounts::merged)

@@ -219,13 +219,15 @@ def test_batch_options_and_report(paper_world):
 
 
 @pytest.mark.parametrize("method", ["nn", "jcbb"])
-def test_association_from_python_equals_the_cpp_run(tmp_path, method):
+@pytest.mark.parametrize("place", ["filter", "held"])
+def test_association_from_python_equals_the_cpp_run(tmp_path, method, place):
     """An Associator driven from Python through run_loop's associate hook, on the park with
     clutter and missed detections: scored against the simulator's truth."""
     data, world = seif.simulated_dataset("park", seed=2, steps=400, clutter=0.5, detection_probability=0.9)
     config = paper_config(world)
     options = seif.AssociationOptions()
     options.method = method
+    options.provisional = seif.ProvisionalPlace(place)
     associator = seif.Associator(options)
     f = seif.make_filter("ekf", seif.start_pose(data), config)
     seif.run_loop(f, data, associate=lambda filt, step, k, z: associator.associate(filt, k, z))

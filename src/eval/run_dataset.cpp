@@ -97,6 +97,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
         {"marginal", marginalModeName(o.marginal)},
         {"confirm", o.confirm},
         {"window", o.window},
+        {"provisional", provisionalPlaceName(o.provisional)},
         {"observations", a.observations},
         {"scored", a.scored},
         {"correct", a.correct},
@@ -109,6 +110,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
         {"spurious_landmarks", a.spurious_landmarks},
         {"duplicate_landmarks", a.duplicate_landmarks},
         {"ambiguous_dropped", a.ambiguous_dropped},
+        {"unlabelled_dropped", a.unlabelled_dropped},
         {"provisional_removed", a.provisional_removed},
         {"provisional_final", a.provisional_final},
         {"merged", a.merged},
@@ -237,7 +239,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   Associator associator(request.association);
   report.output = runFilter(*filter, *source, progress, request.trajectory_covariances, checkpointing,
                             resume ? &*resume : nullptr, &associator);
-  if (associating) report.association = associator.counts();
+  if (associating || request.association.drop_unlabelled) report.association = associator.counts();
   report.filter = checkpointing.values["filter"];
   report.info = source->info();
   source.reset();

@@ -33,6 +33,14 @@ std::string_view associationMethodName(AssociationMethod m) {
   return "known";
 }
 
+ProvisionalPlace parseProvisionalPlace(std::string_view s) {
+  if (s == "filter") return ProvisionalPlace::Filter;
+  if (s == "held") return ProvisionalPlace::Held;
+  throw InvalidArgument("unknown provisional place '" + std::string(s) + "' (expected filter or held)");
+}
+
+std::string_view provisionalPlaceName(ProvisionalPlace p) { return p == ProvisionalPlace::Held ? "held" : "filter"; }
+
 namespace {
 
 /// Delta = y_a - y_b with Sigma_Delta = F_Delta Sigma F_Delta^T, F_Delta = [I, -I]:
@@ -123,6 +131,14 @@ class LandmarkGrid {
 struct Provisional {
   std::size_t born = 0;  // the scan (Impl::scans) that started it
   int sightings = 1;
+  // ProvisionalPlace::Held: the landmark's own estimate outside the filter, y = mean +
+  // lever * e_x + e, its error e_x shared with the pose's (the error of the pose that first
+  // saw it, taken as the current pose's: the lever is the inverse sensor model's pose
+  // Jacobian there) and its own e ~ N(0, covariance).
+  bool held = false;
+  Vec2 mean = Vec2::Zero();
+  Mat2 covariance = Mat2::Zero();
+  Mat23 lever = Mat23::Zero();
 };
 
 }  // namespace
@@ -171,7 +187,11 @@ struct Associator::Impl {
 
   void refreshIndex(SlamFilter& filter) {
     for (int id : touched) {
-      if (filter.hasLandmark(id)) grid.put(id, filter.landmark(id));
+      if (filter.hasLandmark(id)) {
+        grid.put(id, filter.landmark(id));
+      } else if (const auto p = provisional.find(id); p != provisional.end() && p->second.held) {
+        grid.put(id, p->second.mean);
+      }
     }
     mergeDuplicates(filter, touched);
     touched.clear();
@@ -235,6 +255,20 @@ struct Associator::Impl {
     }
   }
 
+  /// A held landmark's Kalman update from one sighting, on its own error e (covariance C):
+  /// K = C J_y^T S^-1 with S from the scan's joint marginal, the shared pose error in it.
+  static void updateHeld(Provisional& p, const MeasurementModel& sensor, const Marginal& joint, Eigen::Index row,
+                         const Observation& z) {
+    Mat2 J_y;
+    const PredictedMeasurement pm = predictFromMarginal(sensor, joint, row, sensor.noise(z), nullptr, &J_y);
+    const Eigen::LLT<Mat2> llt(pm.S);
+    if (llt.info() != Eigen::Success) return;
+    const Mat2 K = llt.solve(J_y * p.covariance).transpose();  // C J_y^T S^-1
+    p.mean += K * sensor.residual(z.z, pm.z);
+    const Mat2 C = (Mat2::Identity() - K * J_y) * p.covariance;
+    p.covariance = 0.5 * (C + C.transpose());
+  }
+
   void expireProvisional(SlamFilter& filter, std::size_t scan) {
     std::vector<int> expired;
     for (const auto& [id, p] : provisional) {
@@ -242,7 +276,7 @@ struct Associator::Impl {
     }
     std::sort(expired.begin(), expired.end());
     for (int id : expired) {
-      filter.removeLandmark(id);
+      if (!provisional.at(id).held) filter.removeLandmark(id);
       forget(id);
       ++counts.provisional_removed;
     }
@@ -280,10 +314,17 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   Impl& s = *impl_;
   const auto start = std::chrono::steady_clock::now();
   if (s.options.method == AssociationMethod::Known) {
+    s.counts.observations += observations.size();
+    if (s.options.drop_unlabelled) {
+      const auto unlabelled = [](const Observation& z) { return z.landmark == kUnknownLandmark; };
+      const auto first = std::remove_if(observations.begin(), observations.end(), unlabelled);
+      s.counts.unlabelled_dropped += static_cast<std::size_t>(observations.end() - first);
+      observations.erase(first, observations.end());
+    }
     for (std::size_t i = 0; i < observations.size(); ++i) {
       if (observations[i].landmark == kUnknownLandmark) {
         throw ModelError("association known: observation " + std::to_string(i) +
-                         " has no landmark id (choose --association nn or jcbb)");
+                         " has no landmark id (choose --association nn or jcbb, or drop it: --drop-unlabelled)");
       }
     }
     return;
@@ -305,12 +346,16 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   // Each observation's world point, and how far from it the new-landmark gate can reach:
   // sqrt(new_d2 * lambda_max(J_x P J_x^T + J_z R J_z^T)) of the inverse model.
   std::vector<Vec2> point(observations.size());
+  std::vector<Mat2> spread(observations.size());  // the point's covariance given the pose
+  std::vector<Mat23> lever(observations.size());  // the point's Jacobian in the pose
   std::vector<double> radius(observations.size());
   for (std::size_t i = 0; i < observations.size(); ++i) {
-    Mat23 J_x;
+    Mat23& J_x = lever[i];
     Mat2 J_z;
     point[i] = sensor.inverse(x, observations[i].z, &J_x, &J_z);
     const Mat2 W = J_x * pose.covariance * J_x.transpose() + J_z * sensor.noise(observations[i]) * J_z.transpose();
+    const Mat2 V = J_z * sensor.noise(observations[i]) * J_z.transpose();
+    spread[i] = 0.5 * (V + V.transpose());
     const double lmax = Eigen::SelfAdjointEigenSolver<Mat2>(0.5 * (W + W.transpose()), Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
     radius[i] = std::sqrt(s.new_d2 * std::max(0.0, lmax));
     if (!point[i].allFinite() || !std::isfinite(radius[i])) {
@@ -338,15 +383,39 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   std::vector<double> nearest(observations.size(), std::numeric_limits<double>::infinity());
   // Each observation's candidates from the grid; one joint marginal of the pose and all of
   // them serves every pairing of the scan (and JCBB's joint test).
+  // Held provisional landmarks join it after the filter's, uncorrelated with anything.
   std::vector<std::vector<int>> found(observations.size());
-  std::vector<int> ids;
+  std::vector<int> ids, held;
   for (std::size_t i = 0; i < observations.size() && s.grid.ready(); ++i) {
     s.grid.query(point[i], radius[i] + s.slack, found[i]);
     for (int id : found[i]) {
-      if (scan.column.emplace(id, 3 + 2 * static_cast<Eigen::Index>(ids.size())).second) ids.push_back(id);
+      const auto p = s.provisional.find(id);
+      std::vector<int>& list = p != s.provisional.end() && p->second.held ? held : ids;
+      if (std::find(list.begin(), list.end(), id) == list.end()) list.push_back(id);
     }
   }
-  if (!ids.empty()) scan.joint = filter.marginal(ids, true, s.options.marginal);
+  scan.joint = ids.empty() ? pose : filter.marginal(ids, true, s.options.marginal);
+  for (std::size_t j = 0; j < ids.size(); ++j) scan.column[ids[j]] = 3 + 2 * static_cast<Eigen::Index>(j);
+  if (!held.empty()) {
+    // Rows of y = mean + lever e_x + e: Cov(y, .) = lever Cov(x, .), Cov(y) = lever P_xx lever^T + C.
+    const Eigen::Index n0 = scan.joint.mean.size(), n = n0 + 2 * static_cast<Eigen::Index>(held.size());
+    const Eigen::MatrixXd pose_rows = scan.joint.covariance.topRows(3);
+    Eigen::MatrixXd L(n - n0, 3);
+    for (std::size_t j = 0; j < held.size(); ++j) L.middleRows<2>(2 * static_cast<Eigen::Index>(j)) = s.provisional.at(held[j]).lever;
+    scan.joint.mean.conservativeResize(n);
+    Eigen::MatrixXd& P = scan.joint.covariance;
+    P.conservativeResize(n, n);
+    P.bottomLeftCorner(n - n0, n0) = L * pose_rows;
+    P.topRightCorner(n0, n - n0) = P.bottomLeftCorner(n - n0, n0).transpose();
+    P.bottomRightCorner(n - n0, n - n0) = L * pose_rows.leftCols<3>() * L.transpose();
+    for (std::size_t j = 0; j < held.size(); ++j) {
+      const Eigen::Index r = n0 + 2 * static_cast<Eigen::Index>(j);
+      const Provisional& p = s.provisional.at(held[j]);
+      scan.joint.mean.segment<2>(r) = p.mean;
+      P.block<2, 2>(r, r) += p.covariance;
+      scan.column[held[j]] = r;
+    }
+  }
   for (std::size_t i = 0; i < observations.size(); ++i) {
     const Mat2 R = sensor.noise(observations[i]);
     for (int id : found[i]) {
@@ -377,22 +446,40 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   kept.reserve(observations.size());
   for (std::size_t i = 0; i < observations.size(); ++i) {
     Observation z = observations[i];
+    bool apply = true;  // false: the sighting of a held landmark, kept out of the filter
     if (pairing[i] >= 0) {
       z.landmark = pairing[i];
       if (const auto p = s.provisional.find(z.landmark); p != s.provisional.end()) {
+        if (p->second.held) {
+          s.updateHeld(p->second, sensor, scan.joint, scan.column.at(z.landmark), z);
+          apply = p->second.sightings + 1 >= s.options.confirm;
+          // Confirmed: it enters the filter as one sighting of its fused estimate from here,
+          // z = h(x, mean), with noise J_y C J_y^T: every sighting's information, once.
+          if (apply) {
+            Mat23 J_x;
+            Mat2 J_y;
+            z.z = sensor.predict(x, p->second.mean, &J_x, &J_y);
+            const Mat2 R = J_y * p->second.covariance * J_y.transpose();
+            z.noise = 0.5 * (R + R.transpose());
+          }
+        }
         if (++p->second.sightings >= s.options.confirm) s.provisional.erase(p);
       }
     } else if (nearest[i] > s.new_d2) {
       z.landmark = s.next_id++;
       ++s.counts.new_landmarks;
-      if (s.options.confirm > 1) s.provisional[z.landmark] = Provisional{s.scans, 1};
+      if (s.options.confirm > 1) {
+        const bool hold = s.options.provisional == ProvisionalPlace::Held;
+        s.provisional[z.landmark] = Provisional{s.scans, 1, hold, point[i], spread[i], lever[i]};
+        apply = !hold;
+      }
     } else {
       ++s.counts.ambiguous_dropped;
       continue;
     }
     ++s.seen_truths[z.landmark][z.truth < 0 ? kUnknownLandmark : z.truth];
     s.touched.push_back(z.landmark);
-    kept.push_back(z);
+    if (apply) kept.push_back(z);
   }
   observations = std::move(kept);
   s.counts.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -408,6 +495,11 @@ void Associator::finish(SlamFilter& filter) {
   std::sort(unconfirmed.begin(), unconfirmed.end());
   c.provisional_final = 0;
   for (int id : unconfirmed) {
+    if (s.provisional.at(id).held) {
+      s.forget(id);
+      ++c.provisional_removed;
+      continue;
+    }
     if (filter.smoother()) {
       ++c.provisional_final;
       continue;

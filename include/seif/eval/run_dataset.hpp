@@ -72,7 +72,7 @@ struct RunReport {
   std::optional<SmootherReport> smoother;     ///< a smoother's solve
   std::optional<RunErrors> filter_errors;     ///< with `smooth`: the filter's, before the batch
   std::optional<double> filter_map_distance;  ///< with `smooth`: RMS distance of the filter's map from the batch's [m]
-  std::optional<AssociationCounts> association;  ///< with nn or jcbb: what the association did
+  std::optional<AssociationCounts> association;  ///< with nn or jcbb (or drop_unlabelled): what the association did
   double seconds_wall = 0.0;     ///< open, read and filter
   double seconds_outputs = 0.0;  ///< trajectory, map with covariances, metrics
 };

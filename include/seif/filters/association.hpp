@@ -26,6 +26,23 @@ enum class AssociationMethod {
 AssociationMethod parseAssociationMethod(std::string_view s);
 std::string_view associationMethodName(AssociationMethod m);
 
+/// Where a provisional (not yet confirmed) landmark lives.
+enum class ProvisionalPlace {
+  /// "filter": in the filter from its first sighting, every sighting applied, removed
+  /// exactly (SlamFilter::removeLandmark) when it is not confirmed in time.
+  Filter,
+  /// "held": outside the filter, as a small estimate of its own (a mean and a 2x2
+  /// covariance, updated by each sighting with the pose's uncertainty taken as noise, no
+  /// correlation kept); it enters the filter at its confirming sighting, initialised from
+  /// that one (the earlier sightings are not applied). Clutter then never enters H: in the
+  /// SEIF it never joins the active set nor pushes a tree out of it.
+  Held,
+};
+
+/// "filter" | "held". Throws InvalidArgument naming the valid names.
+ProvisionalPlace parseProvisionalPlace(std::string_view s);
+std::string_view provisionalPlaceName(ProvisionalPlace p);
+
 struct AssociationOptions {
   AssociationMethod method = AssociationMethod::Known;
   /// Chi-square probability of the accept gate (2 dof): an observation whose Mahalanobis
@@ -40,10 +57,16 @@ struct AssociationOptions {
   MarginalMode marginal = MarginalMode::Exact;
   /// A new landmark stays provisional until it has been seen `confirm` times (its first
   /// sighting included) within `window` scans (steps with observations) of its first;
-  /// otherwise it is removed exactly (SlamFilter::removeLandmark). confirm = 1 keeps every
-  /// new landmark. Chosen on the park with one false detection per scan (docs/association.md).
+  /// otherwise it is removed (from the filter exactly, or dropped when held: `provisional`).
+  /// confirm = 1 keeps every new landmark. Chosen on the park with one false detection per
+  /// scan (docs/association.md).
   int confirm = 4;
   int window = 20;
+  ProvisionalPlace provisional = ProvisionalPlace::Filter;
+  /// Known: drop the observations the data names no landmark for (clutter in a simulated
+  /// world) and count them, instead of refusing the step - the reference run that knows
+  /// the association of a cluttered world.
+  bool drop_unlabelled = false;
   /// Chi-square probability (2 dof) of the correspondence test: a landmark observed in the
   /// last scan is merged into an older one nearby (not seen in the same scan) when their
   /// difference is inside it (SlamFilter::mergeLandmarks). 0: never merge.
@@ -73,6 +96,7 @@ struct AssociationCounts {
   std::size_t in_removed_landmarks = 0;  ///< in provisional landmarks removed
   std::size_t new_landmarks = 0;      ///< landmarks started
   std::size_t ambiguous_dropped = 0;  ///< between the gates: dropped
+  std::size_t unlabelled_dropped = 0;  ///< known, drop_unlabelled: without a landmark id, dropped
   std::size_t provisional_removed = 0;  ///< provisional landmarks not confirmed in time
   std::size_t provisional_final = 0;    ///< still provisional at the end (a smoother's map keeps them)
   std::size_t merged = 0;             ///< landmarks merged into another
