@@ -1,4 +1,4 @@
-// Data association (filters/association.hpp): the correspondence test against the dense
+// Data association (association/association.hpp): the correspondence test against the dense
 // computation, the chi-square gates, provisional landmarks removed exactly, known
 // association's refusal, and nn / jcbb scored against the simulator's truth on the park
 // with clutter and missed detections.
@@ -8,10 +8,10 @@
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_loop.hpp>
 #include <seif/eval/stats.hpp>
-#include <seif/filters/association.hpp>
+#include <seif/association/association.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/sim/world.hpp>
-#include "filters/association_scan.hpp"
+#include "association/scan.hpp"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>

@@ -116,14 +116,14 @@ void run(const RunArgs& args) {
                 metres(f.landmark).c_str(), metres(f.ate).c_str(), metres(f.gps).c_str(),
                 metres(r.filter_map_distance).c_str());
   }
-  if (r.association && args.association.method == "known") {
+  if (r.association && args.association.method() == "known") {
     std::printf("  association known: %zu observations, %zu without a landmark id dropped\n", r.association->observations,
                 r.association->unlabelled_dropped);
   } else if (r.association) {
     const AssociationCounts& a = *r.association;
     std::printf("  association %s: %zu observations; %zu of %zu with a truth id correct (%.2f %%), %zu wrong; "
                 "%zu without one (%zu matched to a labelled landmark)\n",
-                args.association.method.c_str(), a.observations, a.correct, a.scored,
+                args.association.method().c_str(), a.observations, a.correct, a.scored,
                 a.scored == 0 ? 0.0 : 100.0 * double(a.correct) / double(a.scored), a.wrong, a.unlabelled,
                 a.unlabelled_matched);
     std::printf("    %zu landmarks started, %zu provisional removed, %zu merged, %zu ambiguous dropped; %zu landmarks at "

@@ -166,6 +166,21 @@ CLI::Validator filterSpecs() {
       "SPEC[,SPEC...]");
 }
 
+namespace {
+
+/// "a|b|c" -> {a, b, c}: an option table's choices, for CLI::IsMember.
+std::vector<std::string> splitChoices(std::string_view choices) {
+  std::vector<std::string> out;
+  for (std::string_view rest = choices; !rest.empty();) {
+    const std::size_t bar = rest.find('|');
+    out.emplace_back(rest.substr(0, bar));
+    rest = bar == std::string_view::npos ? std::string_view() : rest.substr(bar + 1);
+  }
+  return out;
+}
+
+}  // namespace
+
 void FilterFlags::add(CLI::App& cmd, bool batch) {
   FilterSpec defaults;
   defaults.name = "seif";
@@ -179,16 +194,7 @@ void FilterFlags::add(CLI::App& cmd, bool batch) {
                                                                       : "";
     CLI::Option* flag = cmd.add_option("--" + std::string(o.key), value, scope + std::string(o.help));
     switch (o.kind) {
-      case FilterOption::Kind::Choice: {
-        std::vector<std::string> choices;
-        for (std::string_view rest = o.choices; !rest.empty();) {
-          const std::size_t bar = rest.find('|');
-          choices.emplace_back(rest.substr(0, bar));
-          rest = bar == std::string_view::npos ? std::string_view() : rest.substr(bar + 1);
-        }
-        flag->check(CLI::IsMember(choices));
-        break;
-      }
+      case FilterOption::Kind::Choice: flag->check(CLI::IsMember(splitChoices(o.choices))); break;
       case FilterOption::Kind::Integer: flag->transform(integerIn(o.min, o.max)); break;
       case FilterOption::Kind::Seed: flag->transform(seedValue()); break;
       case FilterOption::Kind::Profile: break;
@@ -297,58 +303,46 @@ bool renderFigure(const std::string& script, const std::vector<std::string>& arg
 
 
 void AssociationFlags::add(CLI::App& cmd, bool tuning) {
-  cmd.add_option("--association", method,
-                  "data association: known (the dataset's landmark ids), nn (nearest neighbour: each\n"
-                  "observation its closest landmark inside the accept gate, greedily) or jcbb (joint\n"
-                  "compatibility branch and bound). With nn and jcbb the dataset's ids are hidden from the\n"
-                  "filter and only score the association (metrics.json \"association\"); docs/association.md")
-      ->check(CLI::IsMember({"known", "nn", "jcbb"}))
-      ->capture_default_str();
-  cmd.add_option("--gate-marginal", marginal,
-                  "the covariance the gates use: exact (the marginal) or local (H inverted over a blanket\n"
-                  "around the pose and the candidates, at most seif:blanket variables more: constant time in\n"
-                  "the SEIF, smaller than the marginal)")
-      ->check(CLI::IsMember({"exact", "local"}))
-      ->capture_default_str();
-  if (!tuning) return;
-  cmd.add_option("--accept-gate", options.accept,
-                  "chi-square probability (2 dof) inside which an observation may be a landmark")
-      ->check(CLI::Range(1e-6, 1.0 - 1e-12))
-      ->capture_default_str();
-  cmd.add_option("--new-gate", options.new_landmark,
-                  "chi-square probability beyond which an observation starts a new landmark (between the\n"
-                  "two gates it is dropped as ambiguous); >= --accept-gate")
-      ->check(CLI::Range(1e-6, 1.0 - 1e-12))
-      ->capture_default_str();
-  cmd.add_option("--confirm", options.confirm,
-                  "a new landmark is provisional until seen this many times within --window scans;\n"
-                  "otherwise it is removed exactly (1: keep every new landmark)")
-      ->check(CLI::Range(1, 1000000))
-      ->capture_default_str();
-  cmd.add_option("--provisional", provisional,
-                  "where a provisional landmark lives: filter (in the filter from its first sighting, removed\n"
-                  "exactly if not confirmed) or held (outside it, its own small estimate, entering the filter\n"
-                  "at its confirming sighting: clutter never enters the filter)")
-      ->check(CLI::IsMember({"filter", "held"}))
-      ->capture_default_str();
-  cmd.add_flag("--drop-unlabelled", options.drop_unlabelled,
-               "with --association known: drop the observations without a landmark id (a simulated world's\n"
-               "clutter) instead of refusing them; metrics.json counts them (association.unlabelled_dropped)");
-  cmd.add_option("--window", options.window, "scans (steps with observations) a provisional landmark has to be confirmed in")
-      ->check(CLI::Range(0, 1000000000))
-      ->capture_default_str();
-  cmd.add_option("--jcbb-nodes", options.jcbb_nodes,
-                  "most JCBB search nodes per scan; beyond, the best hypothesis found so far is used")
-      ->check(CLI::Range(1, 1000000000))
-      ->capture_default_str();
+  const AssociationOptions defaults;
+  for (const AssociationOption& o : associationOptions()) {
+    if (o.tuning && !tuning) continue;
+    const std::string key(o.key);
+    std::string& value = values[key];
+    value = o.get(defaults);
+    if (o.kind == AssociationOption::Kind::Flag) {
+      cmd.add_flag_callback("--" + key, [&value] { value = "true"; }, std::string(o.help));
+      continue;
+    }
+    CLI::Option* flag = cmd.add_option("--" + key, value, std::string(o.help));
+    if (o.kind == AssociationOption::Kind::Choice) {
+      flag->check(CLI::IsMember(splitChoices(o.choices)));
+    } else {
+      flag->check([&o](const std::string& v) -> std::string {  // the table's own parser
+        AssociationOptions scratch;
+        try {
+          o.set(scratch, v);
+        } catch (const InvalidArgument& e) {
+          return e.what();
+        }
+        return {};
+      });
+    }
+    flag->capture_default_str();
+  }
 }
 
 AssociationOptions AssociationFlags::resolve() const {
-  AssociationOptions o = options;
-  o.method = parseAssociationMethod(method);
-  o.marginal = parseMarginalMode(marginal);
-  o.provisional = parseProvisionalPlace(provisional);
+  AssociationOptions o;
+  for (const AssociationOption& option : associationOptions()) {
+    const auto it = values.find(std::string(option.key));
+    if (it != values.end()) option.set(o, it->second);
+  }
   return o;
+}
+
+std::string AssociationFlags::method() const {
+  const auto it = values.find("association");
+  return it != values.end() ? it->second : "known";
 }
 
 }  // namespace seif::cli

@@ -1,6 +1,6 @@
 #pragma once
 // Option groups shared by the commands that run filters.
-#include <seif/filters/association.hpp>
+#include <seif/association/association.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/io/event_source.hpp>
@@ -68,16 +68,15 @@ struct FilterFlags {
   FilterSpec resolve() const;
 };
 
-/// Data association's flags (--association, the gates, --gate-marginal, --confirm,
-/// --provisional, --window, --jcbb-nodes), shared by run and bench.
+/// Data association's flags, one per row of the association option table
+/// (associationOptions(): --association, --gate-marginal, the gates, --confirm, --window,
+/// --provisional, ...), shared by run and bench, with the library's defaults.
 struct AssociationFlags {
-  std::string method = "known";
-  std::string marginal = "exact";
-  std::string provisional = "filter";
-  AssociationOptions options;
-  /// Without `tuning` only --association and --gate-marginal (the rest at their defaults).
+  std::map<std::string, std::string> values;  ///< option key -> value as typed
+  /// Without `tuning` only the rows that are not tuning (--association, --gate-marginal).
   void add(CLI::App& cmd, bool tuning = true);
   AssociationOptions resolve() const;
+  std::string method() const;  ///< --association as typed
 };
 
 /// The keys a filter spec takes, for --filter's help (from filterOptions()).

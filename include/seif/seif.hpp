@@ -7,12 +7,15 @@
 //            Cartesian) models with their Jacobians
 //   filters  SlamFilter (predict / update / marginal queries / removal and merge), built from
 //            a spec ("ekf", "eif", "seif:sparsify=eseif", "batch") by makeFilter()
+//   association  which landmark each observation is of when the data does not say: known,
+//            nn, jcbb; provisional landmarks and merging (Associator)
 //   io       openDataset() over every format (an EventSource), writers of results
 //   sim      the paper's world and scalable worlds, as datasets
 //   eval     the run loop with observers, runDataset (`seif run` as one call), the
 //            experiments (paper, consistency, bench) and their metrics
 #include <Eigen/Dense>  // the linear algebra the API speaks (poses, covariances)
 
+#include <seif/association/association.hpp>
 #include <seif/core/angles.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/core/errors.hpp>

@@ -5,7 +5,7 @@
 #include "filters/batch_map.hpp"
 #include "filters/eif_slam.hpp"
 #include "filters/ekf_slam.hpp"
-#include <seif/filters/association.hpp>
+#include <seif/association/association.hpp>
 #include <seif/filters/factory.hpp>
 #include "filters/seif_slam.hpp"
 #include <seif/filters/slam_filter.hpp>
@@ -381,17 +381,17 @@ void bindSlamFilter(py::module_& m) {
 }  // namespace
 
 void bindAssociation(py::module_& m) {
-  bindNamedEnum<AssociationMethod>(m, "AssociationMethod", "'known' | 'nn' | 'jcbb' (filters/association.hpp)",
+  bindNamedEnum<AssociationMethod>(m, "AssociationMethod", "'known' | 'nn' | 'jcbb' (association/association.hpp)",
                                    &parseAssociationMethod, &associationMethodName)
       .value("Known", AssociationMethod::Known)
       .value("NearestNeighbour", AssociationMethod::NearestNeighbour)
       .value("Jcbb", AssociationMethod::Jcbb);
-  bindNamedEnum<ProvisionalPlace>(m, "ProvisionalPlace", "'filter' | 'held' (filters/association.hpp)",
+  bindNamedEnum<ProvisionalPlace>(m, "ProvisionalPlace", "'filter' | 'held' (association/association.hpp)",
                                   &parseProvisionalPlace, &provisionalPlaceName)
       .value("Filter", ProvisionalPlace::Filter)
       .value("Held", ProvisionalPlace::Held);
   py::class_<AssociationOptions>(m, "AssociationOptions",
-                                 "Data association's options (filters/association.hpp; `seif run --association`)")
+                                 "Data association's options (association/association.hpp; `seif run --association`)")
       .def(py::init<>())
       .def_readwrite("method", &AssociationOptions::method)
       .def_readwrite("accept", &AssociationOptions::accept, "chi-square probability of the accept gate")
@@ -409,6 +409,24 @@ void bindAssociation(py::module_& m) {
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"method", "accept", "new_landmark", "marginal", "confirm", "window", "provisional", "merge"});
       });
+  m.def(
+      "association_options",
+      [] {
+        py::list rows;
+        const AssociationOptions defaults;
+        for (const AssociationOption& o : associationOptions()) {
+          py::dict row;
+          row["key"] = std::string(o.key);
+          row["attribute"] = std::string(o.attribute);
+          row["choices"] = std::string(o.choices);
+          row["default"] = o.get(defaults);
+          row["help"] = std::string(o.help);
+          rows.append(row);
+        }
+        return rows;
+      },
+      "The table of association options the CLI's flags and metrics.json share: one dict per option "
+      "(key: the flag; attribute: AssociationOptions' and metrics.json's name; choices; default as text; help).");
   py::class_<AssociationCounts>(m, "AssociationCounts", "What an association did, scored against Observation.truth")
       .def_readonly("observations", &AssociationCounts::observations)
       .def_readonly("scored", &AssociationCounts::scored)

@@ -238,3 +238,21 @@ def test_association_from_python_equals_the_cpp_run(tmp_path, method, place):
     assert counts.landmarks_final == len(f.landmark_ids())
     truths = {associator.truth_of(i) for i in f.landmark_ids()}
     assert all(t >= 6 for t in truths), "every landmark labelled with a tree of the world"
+
+
+def test_the_association_option_table_names_every_attribute():
+    """Each row of the table the flags and metrics.json come from is an attribute of
+    AssociationOptions, with the same default."""
+    options = seif.AssociationOptions()
+    rows = seif.association_options()
+    assert {r["key"] for r in rows} >= {"association", "gate-marginal", "accept-gate", "provisional", "drop-unlabelled"}
+    for row in rows:
+        value = getattr(options, row["attribute"])
+        if isinstance(value, bool):
+            assert row["default"] == ("true" if value else "false")
+        elif isinstance(value, float):
+            assert float(row["default"]) == value
+        elif isinstance(value, int) and not hasattr(value, "name"):
+            assert int(row["default"]) == value
+        else:
+            assert row["default"] in row["choices"].split("|")

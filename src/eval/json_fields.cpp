@@ -29,6 +29,21 @@ nlohmann::json toJson(const SeifOptions& o) {
   return j;
 }
 
+nlohmann::json toJson(const AssociationOptions& o) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const AssociationOption& option : associationOptions()) {
+    const std::string value = option.get(o), key(option.attribute);
+    switch (option.kind) {
+      case AssociationOption::Kind::Choice: j[key] = value; break;
+      case AssociationOption::Kind::Integer: j[key] = std::stoll(value); break;
+      case AssociationOption::Kind::Probability:
+      case AssociationOption::Kind::Length: j[key] = std::stod(value); break;
+      case AssociationOption::Kind::Flag: j[key] = value == "true"; break;
+    }
+  }
+  return j;
+}
+
 nlohmann::json toJson(const FilterStats& s) {
   return {{"landmarks", s.landmarks},
           {"links", s.links},

@@ -90,14 +90,8 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
   if (r.association) {
     const AssociationCounts& a = *r.association;
     const AssociationOptions& o = request.association;
-    j["association"] = {
-        {"method", associationMethodName(o.method)},
-        {"accept_gate", o.accept},
-        {"new_landmark_gate", o.new_landmark},
-        {"marginal", marginalModeName(o.marginal)},
-        {"confirm", o.confirm},
-        {"window", o.window},
-        {"provisional", provisionalPlaceName(o.provisional)},
+    j["association"] = toJson(o);  // the options, then what they did
+    j["association"].update(nlohmann::json{
         {"observations", a.observations},
         {"scored", a.scored},
         {"correct", a.correct},
@@ -119,7 +113,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
         {"seconds", a.seconds},
         {"scoring", "each landmark is labelled with the truth id most of its observations carry (the older of "
                     "two with one label keeps it); scored: observations with a truth id in a landmark at the end; "
-                    "correct: in the landmark labelled with their truth"}};
+                    "correct: in the landmark labelled with their truth"}});
   }
   if (r.smoother) {
     const SmootherReport& b = *r.smoother;

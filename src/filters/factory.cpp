@@ -6,11 +6,10 @@
 #include <seif/filters/factory.hpp>
 
 #include "filters/information_ops.hpp"
+#include "filters/option_values.hpp"
 
 #include <algorithm>
 #include <array>
-#include <charconv>
-#include <cmath>
 #include <limits>
 #include <string>
 
@@ -22,43 +21,10 @@ namespace {
   throw InvalidArgument("filter '" + std::string(text) + "': " + what);
 }
 
-std::int64_t parseInteger(std::string_view key, std::string_view value, std::int64_t lo, std::int64_t hi) {
-  std::int64_t v = 0;
-  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
-  if (ec != std::errc() || end != value.data() + value.size()) {
-    throw InvalidArgument(std::string(key) + "=" + std::string(value) + " is not an integer");
-  }
-  if (v < lo || v > hi) {
-    throw InvalidArgument(std::string(key) + "=" + std::string(value) + " is outside [" + std::to_string(lo) + ", " +
-                          std::to_string(hi) + "]");
-  }
-  return v;
-}
-
-double parseLength(std::string_view key, std::string_view value) {
-  double v = 0.0;
-  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
-  if (ec != std::errc() || end != value.data() + value.size() || !std::isfinite(v) || v < 0.0) {
-    throw InvalidArgument(std::string(key) + "=" + std::string(value) + " is not a finite length >= 0");
-  }
-  return v;
-}
-
-/// Shortest text that parses back to v.
-std::string formatLength(double v) {
-  char buf[32];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, ec == std::errc() ? end : buf);
-}
-
-std::uint64_t parseSeed(std::string_view value) {
-  std::uint64_t v = 0;
-  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
-  if (ec != std::errc() || end != value.data() + value.size()) {
-    throw InvalidArgument("seed=" + std::string(value) + " is not an integer in [0, 2^64 - 1]");
-  }
-  return v;
-}
+using options::formatReal;
+using options::parseInteger;
+using options::parseLength;
+using options::parseSeed;
 
 using Opt = FilterOption;
 constexpr auto kAll = Opt::Scope::AllButBatch;
@@ -135,7 +101,7 @@ const std::array<FilterOption, 17> kOptions = {{
     {"reanchor", kSeif, Opt::Kind::Length, "", 0, 0,
      "linearization=invariant: re-anchor an observed landmark whose mean moved more than this [m]",
      [](FilterSpec& s, std::string_view v) { s.seif.reanchor = parseLength("reanchor", v); },
-     [](const FilterSpec& s) { return formatLength(s.seif.reanchor); }},
+     [](const FilterSpec& s) { return formatReal(s.seif.reanchor); }},
     {"seed", kSeif, Opt::Kind::Seed, "", 0, 0, "seed of the random choice of relaxed landmarks",
      [](FilterSpec& s, std::string_view v) { s.seif.seed = parseSeed(v); },
      [](const FilterSpec& s) { return std::to_string(s.seif.seed); }},

@@ -6,7 +6,7 @@
 //
 // runBenchCase() measures one case in the calling process; runBench() runs the whole study,
 // each case in a forked child so that the peak memory of one case does not leak into the next.
-#include <seif/filters/association.hpp>
+#include <seif/association/association.hpp>
 #include <seif/filters/seif_options.hpp>
 #include <seif/filters/slam_filter.hpp>
 

@@ -4,7 +4,7 @@
 // comes either in memory (Dataset: the simulator's worlds) or as a stream of events
 // (EventSource: every reader); StepAssembler (step_assembler.hpp) turns events into filter
 // steps, and the run never holds the observations of more than one step.
-#include <seif/filters/association.hpp>
+#include <seif/association/association.hpp>
 #include <seif/filters/slam_filter.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/io/event_source.hpp>

@@ -37,7 +37,7 @@ struct RunRequest {
   /// Run `filter`, then the batch MAP from its estimate (makeSmoother): the outputs are the
   /// smoothed ones, the filter's are written beside them and compared.
   bool smooth = false;
-  /// Data association (filters/association.hpp): known uses the data's ids; nn and jcbb hide
+  /// Data association (association/association.hpp): known uses the data's ids; nn and jcbb hide
   /// them from the filter (they only score the association: metrics.json "association").
   AssociationOptions association;
   bool map_covariances = true;  ///< map.csv with each landmark's exact marginal covariance

@@ -45,7 +45,7 @@ class RunObserver {
 
 /// Between predict and update of step k: may rewrite `observations` (initially the step's)
 /// before the filter's update sees them, e.g. to associate them with the map (an Associator,
-/// filters/association.hpp, which may also take provisional landmarks out of the filter).
+/// association/association.hpp, which may also take provisional landmarks out of the filter).
 using AssociateHook = std::function<void(SlamFilter& filter, const Step& step, std::size_t k,
                                          std::vector<Observation>& observations)>;
 

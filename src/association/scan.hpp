@@ -1,6 +1,6 @@
 #pragma once
-// One scan's association problem, as the strategies see it (association_nn.cpp,
-// association_jcbb.cpp): each observation's individually compatible landmarks with their
+// One scan's association problem, as the strategies see it (nn.cpp,
+// jcbb.cpp): each observation's individually compatible landmarks with their
 // Mahalanobis distances, and for JCBB the joint marginal of the pose and every candidate.
 #include <seif/filters/slam_filter.hpp>
 

@@ -10,7 +10,10 @@
 #include <seif/filters/slam_filter.hpp>
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
+#include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -80,6 +83,30 @@ struct AssociationOptions {
   int refresh = 16;
   double slack = 0.0;  ///< 0: the radius of the new-landmark gate at the first scan
 };
+
+/// One option of data association. The table of them (associationOptions()) is the single
+/// description the CLI's flags (`--<key>`), metrics.json's "association" object and Python's
+/// table (seif.association_options()) come from; `attribute` names the AssociationOptions
+/// member (Python's attribute, the json key).
+struct AssociationOption {
+  /// Probability: a chi-square probability in [0, 1). Flag: true | false (a bare flag).
+  enum class Kind { Choice, Integer, Probability, Length, Flag };
+  std::string_view key;        ///< the flag, "accept-gate"
+  std::string_view attribute;  ///< "accept"
+  Kind kind;
+  std::string_view choices;  ///< Choice: the values, "known|nn|jcbb"
+  std::int64_t min = 0;      ///< Integer: the range
+  std::int64_t max = 0;
+  bool tuning = true;  ///< false: a flag of every command that associates (`run` and `bench`)
+  std::string_view help;
+  /// Sets the option from its text; throws InvalidArgument naming key and value.
+  void (*set)(AssociationOptions& options, std::string_view value);
+  /// The option's value, as text set() takes.
+  std::string (*get)(const AssociationOptions& options);
+};
+
+/// Every association option, in the order metrics.json lists them.
+std::span<const AssociationOption> associationOptions();
 
 /// What the association did, scored at finish() against Observation::truth where the data
 /// names one. Each landmark is labelled with the truth id most of its observations carry

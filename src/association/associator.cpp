@@ -1,9 +1,9 @@
-// The associator (include/seif/filters/association.hpp): candidates from a grid of landmark
-// means, the two gates, a strategy per file (association_nn.cpp, association_jcbb.cpp),
+// The associator (include/seif/association/association.hpp): candidates from a grid of landmark
+// means, the two gates, a strategy per file (nn.cpp, jcbb.cpp),
 // provisional landmarks, and the scoring against Observation::truth.
 #include <seif/core/errors.hpp>
-#include <seif/filters/association.hpp>
-#include "filters/association_scan.hpp"
+#include <seif/association/association.hpp>
+#include "association/scan.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -6,7 +6,7 @@
 // innovation covariance S_H = J_H Sigma J_H^T + R_H uses one joint marginal Sigma of the
 // pose and every candidate of the scan; its Cholesky factor grows by one 2x2 block per
 // pairing (O(k^2) per node).
-#include "filters/association_scan.hpp"
+#include "association/scan.hpp"
 
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -53,7 +53,7 @@ class Search {
   Search(const ScanProblem& scan, std::size_t max_nodes) : max_nodes_(max_nodes) {
     const std::size_t m = scan.compatible.size();
     candidates_.resize(m);
-    // The scan's joint marginal of the pose and every candidate (association.cpp).
+    // The scan's joint marginal of the pose and every candidate (associator.cpp).
     const Marginal& joint = scan.joint;
     for (std::size_t i = 0; i < m; ++i) {
       for (const Pairing& p : scan.compatible[i]) {

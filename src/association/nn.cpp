@@ -1,7 +1,7 @@
 // Nearest neighbour with individual compatibility (Probabilistic Robotics §7.5, §12.7):
 // every pairing inside the accept gate, taken greedily by Mahalanobis distance, one
 // landmark per observation and one observation per landmark in a scan.
-#include "filters/association_scan.hpp"
+#include "association/scan.hpp"
 
 #include <algorithm>
 #include <unordered_set>
