@@ -46,6 +46,7 @@ Scenario scenarioWithOutliers(std::uint64_t seed, int landmarks, int steps) {
 struct Outcome {
   Eigen::VectorXd mean;
   Mat3 pose_covariance;
+  Eigen::MatrixXd conservative;  // the conservative marginal of the pose and every landmark
   std::vector<int> ids;
   FilterStats stats;
   std::size_t rejected = 0;
@@ -57,6 +58,7 @@ Outcome outcome(const SlamFilter& f) {
   o.mean = f.mean();
   o.pose_covariance = f.poseCovariance();
   o.ids = f.landmarkIds();
+  o.conservative = f.marginal(o.ids, true, MarginalMode::Conservative).covariance;
   o.stats = f.stats();
   o.rejected = f.rejectedObservations();
   if (const auto* seif = dynamic_cast<const SeifSlam*>(&f)) {
@@ -76,6 +78,7 @@ bool sameBits(const M& a, const M& b) {
 void expectIdentical(const Outcome& a, const Outcome& b, const std::string& what) {
   EXPECT_TRUE(sameBits(a.mean, b.mean)) << what << ": mean differs";
   EXPECT_TRUE(sameBits(a.pose_covariance, b.pose_covariance)) << what << ": pose covariance differs";
+  EXPECT_TRUE(sameBits(a.conservative, b.conservative)) << what << ": conservative marginal differs";
   EXPECT_EQ(a.ids, b.ids) << what;
   EXPECT_EQ(a.stats.landmarks, b.stats.landmarks) << what;
   EXPECT_EQ(a.stats.links, b.stats.links) << what;
@@ -377,6 +380,11 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   EXPECT_TRUE(seif2->mean() == seif3->mean());
   EXPECT_TRUE(seif2->information() == seif3->information());
   EXPECT_EQ(dynamic_cast<const SeifSlam&>(*seif2).options().blanket, 0);
+  // Files before version 4 hold no covariance bounds: the exact marginals become the bounds.
+  const auto seif3_file = load(root / "corpus" / "fuzz_checkpoint" / "seif-v3.ckpt");
+  for (int id : seif3_file->landmarkIds()) {
+    EXPECT_TRUE(dynamic_cast<const SeifSlam&>(*seif3_file).covarianceBound(id) == seif3_file->landmarkCovariance(id));
+  }
   EXPECT_EQ(dynamic_cast<const SeifSlam&>(*seif3).options().blanket, SeifOptions{}.blanket);
 }
 #endif

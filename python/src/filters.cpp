@@ -232,7 +232,9 @@ void bindSlamFilter(py::module_& m) {
   using Columns = Eigen::Matrix<double, Eigen::Dynamic, 2>;
   py::enum_<MarginalMode>(m, "MarginalMode", "How a marginal is computed (SlamFilter.marginal)")
       .value("Exact", MarginalMode::Exact, "the posterior's marginal")
-      .value("Local", MarginalMode::Local, "from a blanket around the queried variables (never larger than Exact)");
+      .value("Local", MarginalMode::Local, "from a blanket around the queried variables (never larger than Exact)")
+      .value("Conservative", MarginalMode::Conservative,
+             "an upper bound on the marginal, never smaller than Exact (the SEIF's in constant time)");
 
   py::class_<SlamFilter>(m, "SlamFilter",
                          "The interface of every filter (EKF, EIF, SEIF, batch MAP). Build one with make_filter().\n"
@@ -277,7 +279,7 @@ void bindSlamFilter(py::module_& m) {
           },
           py::arg("id"), py::arg("sensor") = nullptr, py::arg("R") = py::none(), py::arg("mode") = MarginalMode::Exact,
           "Predicted measurement of landmark `id` and its innovation covariance S = J Sigma J^T + R "
-          "over the joint marginal of pose and landmark (`mode`: MarginalMode.Exact or Local; "
+          "over the joint marginal of pose and landmark (`mode`: MarginalMode.Exact, Local or Conservative; "
           "defaults: the config's sensor and its noise). Raises UnknownLandmark.")
       .def(
           "marginal",
@@ -288,7 +290,8 @@ void bindSlamFilter(py::module_& m) {
           py::arg("landmark_ids"), py::arg("pose") = true, py::arg("mode") = MarginalMode::Exact,
           "(mean, covariance) of the pose (when `pose`) and the landmarks `landmark_ids`, in that order. "
           "Exact: the posterior's marginal; Local: H inverted over a blanket around them (the SEIF's "
-          "bounded by SeifOptions.blanket: constant time), never larger than Exact. Raises UnknownLandmark.")
+          "bounded by SeifOptions.blanket: constant time), never larger than Exact; Conservative: an upper "
+          "bound, never smaller than Exact (the SEIF's kept in constant time). Raises UnknownLandmark.")
       .def("remove_landmark", &SlamFilter::removeLandmark, py::arg("id"),
            "Takes the landmark out of the map exactly (its marginal out of the posterior).")
       .def("merge_landmarks", &SlamFilter::mergeLandmarks, py::arg("keep"), py::arg("drop"),

@@ -88,9 +88,10 @@ const std::array<FilterOption, 17> kOptions = {{
      "which K landmarks each step relaxes: the next in map order (cyclic) or drawn at random (the paper)",
      [](FilterSpec& s, std::string_view v) { s.seif.relax_order = SeifOptions::parseRelaxOrder(v); },
      [](const FilterSpec& s) { return std::string(optionName(s.seif.relax_order)); }},
-    {"covariance", kSeif, kChoice, "exact|local", 0, 0,
+    {"covariance", kSeif, kChoice, "exact|local|conservative", 0, 0,
      "how poseCovariance() and landmarkCovariance() are recovered: exact (one sparse factorisation "
-     "per changed H) or local (a bounded blanket's, constant time, for display)",
+     "per changed H), local (a bounded blanket's, constant time, never larger than exact) or "
+     "conservative (an upper bound kept in constant time, never smaller than exact)",
      [](FilterSpec& s, std::string_view v) { s.seif.covariance = SeifOptions::parseCovariance(v); },
      [](const FilterSpec& s) { return std::string(optionName(s.seif.covariance)); }},
     {"blanket", kSeif, kInteger, "", 0, kIntMax,

@@ -7,6 +7,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <queue>
+#include <unordered_map>
 #include <cmath>
 #include <string>
 
@@ -193,7 +194,8 @@ class BlanketIndex {
 Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
                                         const std::function<void(int, std::vector<BlanketLink>&)>& neighbours,
                                         const std::function<Eigen::MatrixXd(int)>& diagonal,
-                                        const std::string& filter, std::size_t budget) {
+                                        const std::string& filter, std::size_t budget,
+                                        const std::function<Eigen::MatrixXd(int)>& bound) {
   // The blanket: the queried variables first, then the others in the order they joined;
   // each member's links are kept for assembling H below.
   std::vector<int> order;
@@ -269,7 +271,50 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
   Eigen::Index n = 0;
   for (int v : vars) n += dim(v);
   const Eigen::Index q = offset[queried];
-  const Eigen::MatrixXd X = llt.solve(Eigen::MatrixXd::Identity(H.rows(), q)).topRows(q);
+  const Eigen::MatrixXd Z = llt.solve(Eigen::MatrixXd::Identity(H.rows(), q));  // H_II^-1 E_Q
+  Eigen::MatrixXd X = Z.topRows(q);
+  if (bound) {
+    // The boundary's share: y_I = -H_II^-1 H_Ib y_b + v, v independent of the rest, so
+    // Sigma_QQ = X + sum over boundary pairs M_c Cov(y_c, y_d) M_d^T, M_c = -Z^T H_Ic, which
+    // covariance intersection bounds by sum_c M_c B_c M_c^T / w_c (seif_bounds.hpp).
+    std::unordered_map<int, std::size_t> at;  // boundary variable -> its M_c
+    std::vector<std::pair<int, Eigen::MatrixXd>> M;
+    std::unordered_map<int, std::vector<BlanketLink>> far_links;  // of boundary variables, when needed
+    for (std::size_t a = 0; a < order.size(); ++a) {
+      const Eigen::Index da = dim(order[a]);
+      for (const BlanketLink& l : links[a]) {
+        if (index.has(l.var)) continue;
+        const Eigen::Index dc = dim(l.var);
+        Eigen::MatrixXd H_ac(da, dc);
+        if (l.block != nullptr) {
+          H_ac = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(l.block, da, dc, Eigen::OuterStride<>(l.stride));
+        } else {  // given from the boundary variable's side, as H_{c,a}
+          auto [it, fresh] = far_links.try_emplace(l.var);
+          if (fresh) neighbours(l.var, it->second);
+          const auto back = std::find_if(it->second.begin(), it->second.end(),
+                                         [&](const BlanketLink& b) { return b.var == order[a] && b.block != nullptr; });
+          if (back == it->second.end()) throw NumericError(filter + ": a link without its block");
+          H_ac = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(back->block, dc, da,
+                                                                            Eigen::OuterStride<>(back->stride))
+                     .transpose();
+        }
+        auto [it, fresh] = at.try_emplace(l.var, M.size());
+        if (fresh) M.emplace_back(l.var, Eigen::MatrixXd::Zero(q, dc));
+        M[it->second].second.noalias() -= Z.middleRows(offset[a], da).transpose() * H_ac;
+      }
+    }
+    std::vector<double> traces(M.size());
+    std::vector<Eigen::MatrixXd> bounds(M.size());
+    double total = 0.0;
+    for (std::size_t c = 0; c < M.size(); ++c) {
+      bounds[c] = bound(M[c].first);
+      traces[c] = (M[c].second * bounds[c] * M[c].second.transpose()).trace();
+      total += std::sqrt(traces[c]);
+    }
+    for (std::size_t c = 0; c < M.size(); ++c) {
+      if (traces[c] > 0.0) X.noalias() += (total / std::sqrt(traces[c])) * M[c].second * bounds[c] * M[c].second.transpose();
+    }
+  }
   std::vector<Eigen::Index> rows;
   rows.reserve(static_cast<std::size_t>(n));
   for (int v : vars) {

@@ -113,12 +113,18 @@ double linkStrength(const DiagA& da, const Block& H_ac, const DiagC& dc) {
 ///   one with the strongest link to those already in, at any distance, until it holds b
 ///   variables besides the queried ones. The blankets of growing budgets are nested, so the
 ///   result grows with b (conditioning on less) towards the exact marginal.
+/// With `bound` (an upper bound on any variable's marginal covariance) the result is
+/// MarginalMode::Conservative instead: the same plus the share of the variables just outside
+/// the blanket, y_I = -H_II^-1 H_Ib y_b + v, with Cov(y_b) bounded by covariance intersection
+/// of their bounds (seif_bounds.hpp), so never smaller than the marginal; it shrinks towards
+/// the marginal as the blanket grows, as the local one grows towards it.
 /// O(s^3) for s variables in the blanket. Throws NumericError when the restricted
 /// information is not positive definite.
 Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
                                         const std::function<void(int, std::vector<BlanketLink>&)>& neighbours,
                                         const std::function<Eigen::MatrixXd(int)>& diagonal,
-                                        const std::string& filter, std::size_t budget = 0);
+                                        const std::string& filter, std::size_t budget = 0,
+                                        const std::function<Eigen::MatrixXd(int)>& bound = {});
 
 /// Counts the links of a dense information matrix in the state order [robot, landmarks]:
 /// non-zero off-diagonal blocks, the robot's links and the largest landmark degree.

@@ -35,7 +35,7 @@ constexpr Names<SeifOptions::Deactivate, 2> kDeactivate{"deactivation rule", {"w
 constexpr Names<SeifOptions::Recovery, 2> kRecovery{"recovery point", {"after-update", "before-update"}};
 constexpr Names<SeifOptions::RelaxOrder, 2> kRelaxOrder{"relaxation order", {"random", "cyclic"}};
 constexpr Names<SeifOptions::Sparsify, 2> kSparsify{"sparsification", {"seif", "eseif"}};
-constexpr Names<SeifOptions::Covariance, 2> kCovariance{"covariance recovery", {"exact", "local"}};
+constexpr Names<SeifOptions::Covariance, 3> kCovariance{"covariance recovery", {"exact", "local", "conservative"}};
 constexpr Names<BatchOptions::Init, 3> kBatchInit{"batch start", {"ekf", "seif", "odometry"}};
 constexpr Names<BatchOptions::Solver, 2> kBatchSolver{"batch solver", {"cholesky", "kkt"}};
 

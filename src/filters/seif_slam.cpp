@@ -1,6 +1,7 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
 #include "core/sparse_marginals.hpp"
+#include "filters/seif_bounds.hpp"
 #include "filters/seif_slam.hpp"
 
 #include <Eigen/Cholesky>
@@ -30,6 +31,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
     throw InvalidArgument("seif: reanchor must be finite and >= 0");
   }
   order_.reserve(kMaxLocalLandmarks + 1);
+  bound_slots_.reserve(kMaxLocalLandmarks + 1);
   ranking_.reserve(kMaxLocalLandmarks + 1);
   if (options.sparsify == SeifOptions::Sparsify::Eseif) {
     alpha_.reserve(kMaxLocalLandmarks + 1);
@@ -107,6 +109,20 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   const std::size_t sparsified = sparsifications_;
   infos_.clear();
   anchors_.clear();
+  // The covariance bounds (seif_bounds.hpp): the joint bound of the robot and the observed
+  // mapped landmarks before any of the step's information, while it fits a local block.
+  bound_slots_.clear();
+  for (const PlannedObservation& p : plan) {
+    if (!p.first && std::find(bound_slots_.begin(), bound_slots_.end(), p.slot) == bound_slots_.end()) {
+      bound_slots_.push_back(p.slot);
+    }
+  }
+  const std::size_t known = bound_slots_.size();
+  bool tighten = known < static_cast<std::size_t>(kMaxLocalLandmarks);
+  if (tighten) {
+    bound_prior_.resize(3 + 2 * static_cast<Eigen::Index>(known), 3 + 2 * static_cast<Eigen::Index>(known));
+    tighten = conservativeCovariance(store_, bound_slots_, bound_prior_, bound_ws_);
+  }
   for (const PlannedObservation& p : plan) {
     if (p.first) store_.addLandmark(p.z->landmark, p.initial);
     std::optional<Anchors> anchors;
@@ -114,7 +130,13 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
     const MeasurementInformation info = measurementInformation(sensor, x, store_.node(p.slot).mu, *p.z,
                                                                sensor.noise(*p.z).inverse(), p.jacobian_landmark,
                                                                anchors, p.constraint);
+    // A new landmark's bound from its first observation and the robot's bound now.
+    const Mat2 bound = p.first ? firstSightingBound(conservativePoseCovariance(store_, bound_ws_), info.H) : Mat2::Zero();
     store_.addObservation(p.slot, info.H, info.b);  // links it to the robot: active
+    if (p.first) {
+      store_.setBound(p.slot, bound);
+      bound_slots_.push_back(p.slot);
+    }
     infos_.push_back(info);
     anchors_.push_back(anchors);
     // A batch larger than the local block would allow is sparsified as it comes.
@@ -137,6 +159,36 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
                                          p.jacobian_landmark, anchors_[k], p.constraint);
       store_.addObservation(p.slot, infos_[k].H, infos_[k].b);
     }
+  }
+  // Every bound tightened by the step's information (C^-1 + I)^-1, unless a sparsification
+  // within the batch changed the robot's conditional between the prior and the information.
+  tighten = tighten && sparsifications_ == sparsified && bound_slots_.size() < static_cast<std::size_t>(kMaxLocalLandmarks);
+  if (config_.iterations > 1 && sparsifications_ == sparsified) {
+    // The iterations replaced information that entered before a new landmark's first
+    // sighting, so its bound from then may not hold: from the robot's bound now (the new
+    // landmark's only link is still the robot).
+    const Mat3 C_x = conservativePoseCovariance(store_, bound_ws_);
+    for (std::size_t j = known; j < bound_slots_.size(); ++j) {
+      Eigen::Matrix<double, 5, 5> I = Eigen::Matrix<double, 5, 5>::Zero();
+      for (std::size_t k = 0; k < plan.size(); ++k) {
+        if (plan[k].slot == bound_slots_[j]) I += infos_[k].H;
+      }
+      store_.setBound(bound_slots_[j], firstSightingBound(C_x, I));
+    }
+  }
+  if (tighten) {
+    const auto n = 3 + 2 * static_cast<Eigen::Index>(bound_slots_.size());
+    bound_added_.setZero(n, n);
+    for (std::size_t k = 0; k < plan.size(); ++k) {
+      const auto r = 3 + 2 * static_cast<Eigen::Index>(
+                             std::find(bound_slots_.begin(), bound_slots_.end(), plan[k].slot) - bound_slots_.begin());
+      const Eigen::Matrix<double, 5, 5>& I = infos_[k].H;
+      bound_added_.topLeftCorner<3, 3>() += I.topLeftCorner<3, 3>();
+      bound_added_.block<3, 2>(0, r) += I.topRightCorner<3, 2>();
+      bound_added_.block<2, 3>(r, 0) += I.bottomLeftCorner<2, 3>();
+      bound_added_.block<2, 2>(r, r) += I.bottomRightCorner<2, 2>();
+    }
+    tightenBounds(store_, bound_slots_, bound_prior_, bound_added_);
   }
   book_.commit();
 }
@@ -188,7 +240,12 @@ void SeifSlam::reanchorIfMoved(int slot) {
   };
   if (!room()) sparsify();
   if (!room()) return;  // a landmark with more links than a local block holds keeps its anchor
-  store_.reanchorLandmark(slot);
+  reanchorLandmark(slot, n.mu);
+}
+
+void SeifSlam::reanchorLandmark(int slot, const Vec2& to) {
+  store_.setBound(slot, reanchoredBound(store_, slot, to, bound_ws_));
+  store_.reanchorLandmark(slot, to);
   invalidateFactor();
 }
 
@@ -218,18 +275,23 @@ void SeifSlam::mergeLandmarks(int keep, int drop) {
     };
     if (!fits(d) && !fits(k)) sparsify();
     if (fits(d)) {
-      store_.reanchorLandmark(d, store_.node(k).anchor);
+      reanchorLandmark(d, store_.node(k).anchor);
     } else if (fits(k)) {
-      store_.reanchorLandmark(k, store_.node(d).anchor);
+      reanchorLandmark(k, store_.node(d).anchor);
     } else {
       removeLandmark(drop);
       return;
     }
   }
+  // Conditioning on y_keep = y_drop leaves the merged landmark's covariance below either
+  // one's: the tighter bound stays.
+  const Mat2 bound = store_.node(k).bound.trace() <= store_.node(d).bound.trace() ? store_.node(k).bound
+                                                                                  : store_.node(d).bound;
   store_.mergeLandmarks(k, d);
   book_.removeSlot(d);
   invalidateFactor();
   const int kept = book_.find(keep);  // keep may have moved into d's slot
+  store_.setBound(kept, bound);
   if (options_.mean == SeifOptions::Mean::Exact) {
     recoverExactMean();
   } else {
@@ -271,20 +333,22 @@ Vec2 SeifSlam::landmark(int id) const { return store_.node(book_.require(id)).mu
 // H stores every robot and landmark diagonal block in full, so each lies in its pattern.
 Mat3 SeifSlam::poseCovariance() const {
   if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance({-1});
+  if (options_.covariance == SeifOptions::Covariance::Conservative) return localCovariance({-1}, true);
   return factor().covarianceBlock<3>(0);
 }
 
 Mat2 SeifSlam::landmarkCovariance(int id) const {
   const int slot = book_.require(id);
   if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance({slot});
+  if (options_.covariance == SeifOptions::Covariance::Conservative) return localCovariance({slot}, true);
   return factor().covarianceBlock<2>(StateLayout::landmark(slot));
 }
 
-Eigen::MatrixXd SeifSlam::localCovariance(std::initializer_list<int> vars) const {
-  return localCovariance(std::span<const int>(vars.begin(), vars.size()));
+Eigen::MatrixXd SeifSlam::localCovariance(std::initializer_list<int> vars, bool conservative) const {
+  return localCovariance(std::span<const int>(vars.begin(), vars.size()), conservative);
 }
 
-Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars) const {
+Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars, bool conservative) const {
   // The blanket from the store's links: the robot's are the active landmarks; a landmark's
   // are its linked landmarks, and the robot when it is active. Bounded by options_.blanket.
   const Vec3 dx = store_.robotInformation().diagonal();
@@ -309,7 +373,15 @@ Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars) const {
         if (v < 0) return store_.robotInformation();
         return store_.node(v).H;
       },
-      "seif (step " + std::to_string(store_.step()) + ")", static_cast<std::size_t>(options_.blanket));
+      "seif (step " + std::to_string(store_.step()) + ")", static_cast<std::size_t>(options_.blanket),
+      conservative ? std::function<Eigen::MatrixXd(int)>([&](int v) -> Eigen::MatrixXd {
+        if (v < 0) {  // seif_bounds.hpp
+          BoundWorkspace ws;
+          return conservativePoseCovariance(store_, ws);
+        }
+        return store_.node(v).bound;
+      })
+                   : nullptr);
 }
 
 Marginal SeifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalMode mode) const {
@@ -330,6 +402,10 @@ Marginal SeifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalM
   }
   if (mode == MarginalMode::Local) {
     m.covariance = localCovariance(vars);
+    return m;
+  }
+  if (mode == MarginalMode::Conservative) {
+    m.covariance = localCovariance(vars, true);
     return m;
   }
   // Exact: one solve with the cached sparse factor per column, H Sigma_{:,i} = e_i.
@@ -355,6 +431,11 @@ Eigen::Matrix<double, Eigen::Dynamic, 2> SeifSlam::landmarkCovarianceColumns(int
     cols.col(c) = factor().solve(e);
   }
   return cols;
+}
+
+void SeifSlam::refreshCovarianceBounds() {
+  const SparseMarginals& f = factor();
+  for (int s = 0; s < store_.size(); ++s) store_.setBound(s, f.covarianceBlock<2>(StateLayout::landmark(s)));
 }
 
 std::vector<int> SeifSlam::activeLandmarks() const {

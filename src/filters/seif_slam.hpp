@@ -10,6 +10,7 @@
 #include "filters/landmark_book.hpp"
 #include <seif/filters/seif_options.hpp>
 #include "filters/information_ops.hpp"
+#include "filters/seif_bounds.hpp"
 #include "filters/seif_store.hpp"
 #include <seif/filters/slam_filter.hpp>
 
@@ -73,6 +74,12 @@ class SeifSlam final : public SlamFilter {
   Eigen::VectorXd exactMean() const;
   /// Runs `sweeps` full Gauss-Seidel sweeps of the mean over every variable.
   void relaxMean(int sweeps);
+  /// The upper bound kept on landmark `id`'s marginal covariance (seif_bounds.hpp).
+  Mat2 covarianceBound(int id) const { return store_.node(book_.require(id)).bound; }
+  /// Sets every landmark's bound to its exact marginal covariance, the tightest bound: one
+  /// sparse factorisation, O(N) at the paper's sparsity (a checkpoint without bounds; a
+  /// refresh when the filter has time, e.g. after a loop closure).
+  void refreshCovarianceBounds();
   /// Ids of the active landmarks (linked to the robot).
   std::vector<int> activeLandmarks() const;
   /// Largest relative magnitude the sparsification formula left in a removed robot link
@@ -107,9 +114,10 @@ class SeifSlam final : public SlamFilter {
                          const MeasurementModel& sensor);  ///< §3, eq. (21-22)
   void sparsify();                                         ///< §4, eq. (44-51)
   /// The joint covariance of `vars` (-1: the robot, else slots) from H restricted to a
-  /// blanket around them of at most options_.blanket more variables (MarginalMode::Local).
-  Eigen::MatrixXd localCovariance(std::span<const int> vars) const;
-  Eigen::MatrixXd localCovariance(std::initializer_list<int> vars) const;
+  /// blanket around them of at most options_.blanket more variables (MarginalMode::Local);
+  /// `conservative`: plus the bounded share of the variables outside it (Conservative).
+  Eigen::MatrixXd localCovariance(std::span<const int> vars, bool conservative = false) const;
+  Eigen::MatrixXd localCovariance(std::initializer_list<int> vars, bool conservative = false) const;
   /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).
   /// With `slot` >= 0 (an active landmark), deactivates that landmark alone.
   void deactivateSurplus(bool solve_active_mean_first, int slot = -1);
@@ -138,6 +146,9 @@ class SeifSlam final : public SlamFilter {
   /// options.reanchor from its anchor (sparsifying first when its neighbours would
   /// overflow the local block).
   void reanchorIfMoved(int slot);
+  /// SeifStore::reanchorLandmark, the landmark's covariance bound carried along first
+  /// (seif_bounds.hpp: reanchoredBound).
+  void reanchorLandmark(int slot, const Vec2& to);
 
   FilterConfig config_;
   LandmarkBook book_;
@@ -160,6 +171,12 @@ class SeifSlam final : public SlamFilter {
   std::vector<unsigned char> roles_;  // per observation of a step: alpha, beta or rejected
   std::vector<MeasurementInformation> infos_;  // measurementUpdate()'s, for iterations
   std::vector<std::optional<Anchors>> anchors_;
+  // measurementUpdate()'s covariance bounds (seif_bounds.hpp): the observed landmarks (the
+  // known ones first), their joint bound with the robot before the update, the information added.
+  std::vector<int> bound_slots_;
+  LocalMatrix bound_prior_;
+  LocalMatrix bound_added_;
+  BoundWorkspace bound_ws_;
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
 
   /// The sparse Cholesky factor of H and its selected inverse, built on first use after H

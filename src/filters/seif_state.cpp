@@ -2,6 +2,7 @@
 // slot order with its links in their own vector order, the robot links in theirs, the
 // counters and the random engine's exact state.
 #include "checkpoint_access.hpp"
+#include <seif/core/errors.hpp>
 
 #include <algorithm>
 #include <sstream>
@@ -36,6 +37,7 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifStore& s) {
     out.fixed(n.b);
     out.fixed(n.mu);
     out.fixed(n.anchor);
+    out.fixed(n.bound);
     out.i64(n.active);
     out.count(n.links.size());
     for (const SeifStore::Link& l : n.links) {
@@ -70,7 +72,7 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
   }
   // Information is positive on its diagonal (deactivation ranks links by it, sqrt'd).
   if (!(s.H_xx_.diagonal().minCoeff() > 0.0)) in.fail("robot information is not positive on its diagonal");
-  const std::size_t nodes = in.count("node count", (in.version() >= 2 ? 4 : 3) * 9 + 9 + 9);
+  const std::size_t nodes = in.count("node count", (in.version() >= 4 ? 5 : in.version() >= 2 ? 4 : 3) * 9 + 9 + 9);
   if (nodes != static_cast<std::size_t>(size)) {
     in.fail(std::to_string(nodes) + " nodes for " + std::to_string(size) + " landmarks");
   }
@@ -87,6 +89,10 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
       in.fixed("landmark anchor", n.anchor, true);
     } else {
       n.anchor = n.mu;
+    }
+    if (in.version() >= 4) {  // older files: SeifSlam's reader sets the exact marginal
+      in.fixed("landmark covariance bound", n.bound, true);
+      if (!(n.bound.diagonal().minCoeff() > 0.0)) in.fail("a landmark's covariance bound is not positive on its diagonal");
     }
     n.active = static_cast<int>(in.i64In("active position", -1, kMaxLocalLandmarks - 1));
     const std::size_t links = in.count("link count", kLinkBytes);
@@ -166,6 +172,14 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
   f.eseif_deferrals_ = static_cast<std::size_t>(in.u64("eseif deferrals"));
   f.eseif_fallbacks_ = static_cast<std::size_t>(in.u64("eseif fallbacks"));
   f.invalidateFactor();
+  if (in.version() < 4) {
+    // No covariance bounds stored: the exact marginals are bounds (seif_bounds.hpp).
+    try {
+      f.refreshCovarianceBounds();
+    } catch (const NumericError& e) {
+      in.fail(e.what());
+    }
+  }
 }
 
 }  // namespace seif

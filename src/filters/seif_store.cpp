@@ -52,7 +52,8 @@ SeifStore::Node& SeifStore::write(int slot) {
   Journal& j = journal_;
   if (j.open && node.journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
     j.entries.push_back({slot, true, j.saved.size()});
-    j.saved.push_back({node.H, node.b, node.mu, node.anchor, node.active, j.saved_links.size(), node.links.size()});
+    j.saved.push_back({node.H, node.bound, node.b, node.mu, node.anchor, node.active, j.saved_links.size(),
+                       node.links.size()});
     j.saved_links.insert(j.saved_links.end(), node.links.begin(), node.links.end());
     node.journaled = j.id;
   }
@@ -83,6 +84,7 @@ void SeifStore::rollbackTransaction() {
     if (e.whole) {
       const Journal::SavedNode& n = j.saved[e.index];
       node.H = n.H;
+      node.bound = n.bound;
       node.b = n.b;
       node.mu = n.mu;
       node.anchor = n.anchor;

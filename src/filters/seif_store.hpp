@@ -34,6 +34,9 @@ class SeifStore {
     /// Where H is anchored for this landmark (Linearization::Invariant; src/filters/invariant.hpp):
     /// its mean when it entered or was last re-anchored.
     Vec2 anchor = Vec2::Zero();
+    /// An upper bound (Loewner order) on its marginal covariance under H, kept by the filter
+    /// (seif_bounds.hpp: MarginalMode::Conservative); zero until its first sighting sets it.
+    Mat2 bound = Mat2::Zero();
     int active = -1;  // position in robotLinks(), or -1 when passive
     std::vector<Link> links;
     long journaled = -1;       // the transaction that saved it whole last (beginTransaction())
@@ -111,6 +114,8 @@ class SeifStore {
   void deleteLandmark(int slot);
   /// Sets the whole mean, in the state order.
   void setMean(const Eigen::VectorXd& mu);
+  /// Sets landmark `slot`'s covariance bound (Node::bound).
+  void setBound(int slot, const Mat2& bound) { write(slot).bound = bound; }
 
   // ---- transactions: a step all or nothing
   /// Journals every change until commitTransaction() or rollbackTransaction(): the robot's
@@ -229,7 +234,7 @@ class SeifStore {
     // A node without its link list, whose links are saved_links[links_begin, + links_count):
     // within a step a node's links only change in value or grow at the end.
     struct SavedNode {
-      Mat2 H;
+      Mat2 H, bound;
       Vec2 b, mu, anchor;
       int active;
       std::size_t links_begin, links_count;

@@ -98,9 +98,20 @@ std::vector<Eigen::Index> SlamFilter::stateIndices(std::span<const int> slots, b
 MarginalMode parseMarginalMode(std::string_view s) {
   if (s == "exact") return MarginalMode::Exact;
   if (s == "local") return MarginalMode::Local;
-  throw InvalidArgument("unknown marginal mode '" + std::string(s) + "' (expected exact or local)");
+  if (s == "conservative") return MarginalMode::Conservative;
+  throw InvalidArgument("unknown marginal mode '" + std::string(s) + "' (expected exact, local or conservative)");
 }
 
-std::string_view marginalModeName(MarginalMode m) { return m == MarginalMode::Local ? "local" : "exact"; }
+std::string_view marginalModeName(MarginalMode m) {
+  switch (m) {
+    case MarginalMode::Local:
+      return "local";
+    case MarginalMode::Conservative:
+      return "conservative";
+    case MarginalMode::Exact:
+      break;
+  }
+  return "exact";
+}
 
 }  // namespace seif

@@ -12,7 +12,7 @@ struct SeifOptions {
   enum class Recovery { AfterMeasurement, BeforeMeasurement };
   enum class RelaxOrder { Random, Cyclic };
   enum class Sparsify { Seif, Eseif };
-  enum class Covariance { Exact, Local };
+  enum class Covariance { Exact, Local, Conservative };
 
   int active = 6;  ///< theta_x (the paper's name): landmarks linked to the robot after each step
   int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
@@ -44,6 +44,7 @@ struct SeifOptions {
   /// at the paper's sparsity, cached: every marginal of one state costs it once). Local: the
   /// inverse of H restricted to a blanket around the variable (`blanket`), O(1): it
   /// conditions on everything outside, so it is never larger than the marginal.
+  /// Conservative: the upper bound MarginalMode::Conservative keeps, O(1), never smaller.
   Covariance covariance = Covariance::Exact;
   /// The blanket of a local marginal (MarginalMode::Local, Covariance::Local): at most this
   /// many variables besides the queried ones, grown from them along the strongest links
@@ -70,7 +71,7 @@ struct SeifOptions {
   static Recovery parseRecovery(std::string_view s);      ///< "after-update" | "before-update"
   static RelaxOrder parseRelaxOrder(std::string_view s);  ///< "random" | "cyclic"
   static Sparsify parseSparsify(std::string_view s);      ///< "seif" | "eseif"
-  static Covariance parseCovariance(std::string_view s);  ///< "exact" | "local"
+  static Covariance parseCovariance(std::string_view s);  ///< "exact" | "local" | "conservative"
 };
 
 /// The name parse*() takes for each value, as specs, flags and metrics.json spell it.

@@ -91,9 +91,15 @@ enum class MarginalMode {
   /// the Markov blanket (every variable linked to a queried one); the SEIF's grows along the
   /// strongest links up to SeifOptions::blanket variables, so it is constant time.
   Local,
+  /// An upper bound on the marginal in the Loewner order, never smaller than Exact: for
+  /// gates that must not reject the right landmark. The SEIF keeps a bound per landmark and
+  /// derives the robot's from its information (covariance intersection over the active
+  /// landmarks), in constant time (docs/consistency.md, "Conservative covariances"); the
+  /// dense filters and the batch return the exact marginal, which bounds itself.
+  Conservative,
 };
 
-/// "exact" | "local". Throws InvalidArgument naming the valid names.
+/// "exact" | "local" | "conservative". Throws InvalidArgument naming the valid names.
 MarginalMode parseMarginalMode(std::string_view s);
 std::string_view marginalModeName(MarginalMode m);
 
@@ -168,15 +174,17 @@ class SlamFilter {
   /// The marginal of the pose (when `pose`) and of `landmarks` (ids), in that order: their
   /// mean and joint covariance, computed as `mode` says. Costs, with N landmarks:
   ///   EKF   any mode: a read of its covariance, O(k^2) for k variables.
-  ///   EIF   Exact: solves with its cached dense factor, O(N^2) per variable (one O(N^3)
-  ///         factorisation per state). Local: a dense inverse of the blanket, O(b^3).
+  ///   EIF   Exact (and Conservative): solves with its cached dense factor, O(N^2) per
+  ///         variable (one O(N^3) factorisation per state). Local: a dense inverse of the
+  ///         blanket, O(b^3).
   ///   SEIF  Exact: solves with its cached sparse factor, O(nnz(L)) per column (one sparse
   ///         factorisation per state). Local: O(b^3), b <= k + SeifOptions::blanket the
-  ///         size of the blanket: constant time.
+  ///         size of the blanket: constant time. Conservative: the same blanket plus the
+  ///         bounded share of the variables linked to it, O(b^3): constant time.
   ///   batch Exact (Local is Exact): solves with the KKT factor after finish(); before it
   ///         the initial guess's (an EKF's).
   /// Local conditions on everything outside the blanket, so it is never larger than the
-  /// marginal. On the simulated worlds the SEIF's local S of a measurement is within 6 % of
+  /// marginal; Conservative is never smaller. On the simulated worlds the SEIF's local S of a measurement is within 6 % of
   /// the exact one at the median, and rejects as many true pairings (docs/association.md).
   /// Throws UnknownLandmark for an id not in the map.
   virtual Marginal marginal(std::span<const int> landmarks, bool pose = true,
