@@ -58,7 +58,8 @@ Outcome outcome(const SlamFilter& f) {
   o.mean = f.mean();
   o.pose_covariance = f.poseCovariance();
   o.ids = f.landmarkIds();
-  o.conservative = f.marginal(o.ids, true, MarginalMode::Conservative).covariance;
+  const auto* bounded = dynamic_cast<const SeifSlam*>(&f);
+  if (!bounded || bounded->options().bounds) o.conservative = f.marginal(o.ids, true, MarginalMode::Conservative).covariance;
   o.stats = f.stats();
   o.rejected = f.rejectedObservations();
   if (const auto* seif = dynamic_cast<const SeifSlam*>(&f)) {
@@ -139,7 +140,9 @@ INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
                                            "ekf:linearization=invariant,iterations=2",
                                            "eif:linearization=invariant,iterations=2",
                                            "seif:linearization=invariant,reanchor=0.01",
-                                           "seif:linearization=invariant,sparsify=eseif"));
+                                           "seif:linearization=invariant,sparsify=eseif",
+                                           "seif:linearization=invariant,iterations=2,bounds=true",
+                                           "seif:sparsify=eseif,covariance=conservative"));
 
 TEST(Checkpoint, RandomOrderDependsOnTheSavedEngine) {
   // The resume test can fail: the same checkpoint with the random engine restarted from
@@ -380,11 +383,11 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   EXPECT_TRUE(seif2->mean() == seif3->mean());
   EXPECT_TRUE(seif2->information() == seif3->information());
   EXPECT_EQ(dynamic_cast<const SeifSlam&>(*seif2).options().blanket, 0);
-  // Files before version 4 hold no covariance bounds: the exact marginals become the bounds.
+  // Files before version 4 kept no covariance bounds: they load without (SeifOptions::bounds off).
   const auto seif3_file = load(root / "corpus" / "fuzz_checkpoint" / "seif-v3.ckpt");
-  for (int id : seif3_file->landmarkIds()) {
-    EXPECT_TRUE(dynamic_cast<const SeifSlam&>(*seif3_file).covarianceBound(id) == seif3_file->landmarkCovariance(id));
-  }
+  EXPECT_TRUE(seif3_file->mean() == seif3->mean());
+  EXPECT_FALSE(dynamic_cast<const SeifSlam&>(*seif3_file).options().bounds);
+  EXPECT_THROW((void)seif3_file->marginal(seif3_file->landmarkIds(), true, MarginalMode::Conservative), InvalidArgument);
   EXPECT_EQ(dynamic_cast<const SeifSlam&>(*seif3).options().blanket, SeifOptions{}.blanket);
 }
 #endif

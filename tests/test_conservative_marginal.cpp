@@ -6,6 +6,7 @@
 #include "filters/seif_slam.hpp"
 #include "scenario.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/filters/slam_filter.hpp>
 
@@ -109,13 +110,16 @@ TEST_P(ConservativeMarginal, NeverSmallerThanTheExactMarginal) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seif, ConservativeMarginal,
-                         ::testing::Values("seif:active=3", "seif:active=3,deactivate=oldest", "seif:active=3,mean=exact",
-                                           "seif:sparsify=eseif,active=3,beta=2", "seif:linearization=fej,active=3",
-                                           "seif:linearization=oc,iterations=2,active=3",
-                                           "seif:linearization=invariant,iterations=2,reanchor=0,active=4",
-                                           "seif:linearization=invariant,sparsify=eseif,active=3,beta=2",
-                                           "seif:profile=consistent", "seif:linearization=invariant,reanchor=0,active=4",
-                                           "seif:linearization=invariant,iterations=2,active=4,reanchor=1000"));
+                         ::testing::Values("seif:active=3,bounds=true", "seif:active=3,deactivate=oldest,bounds=true",
+                                           "seif:active=3,mean=exact,bounds=true",
+                                           "seif:sparsify=eseif,active=3,beta=2,bounds=true",
+                                           "seif:linearization=fej,active=3,bounds=true",
+                                           "seif:linearization=oc,iterations=2,active=3,bounds=true",
+                                           "seif:linearization=invariant,iterations=2,reanchor=0,active=4,bounds=true",
+                                           "seif:linearization=invariant,sparsify=eseif,active=3,beta=2,bounds=true",
+                                           "seif:profile=consistent,bounds=true",
+                                           "seif:linearization=invariant,reanchor=0,active=4,bounds=true",
+                                           "seif:linearization=invariant,iterations=2,active=4,reanchor=1000,bounds=true"));
 
 TEST_P(ConservativeMarginal, EveryStepKeepsExactBoundsBounds) {
   // The sharpest check of each rule in seif_bounds.hpp: before every step every landmark's
@@ -182,6 +186,9 @@ TEST(ConservativeMarginalSeif, CovarianceOptionReadsTheBounds) {
   EXPECT_TRUE(C2.topLeftCorner(5, 5) == C1);
   EXPECT_TRUE(C2.bottomRightCorner(2, 2) == C1.bottomRightCorner(2, 2));
   EXPECT_EQ(parseMarginalMode("conservative"), MarginalMode::Conservative);
+  // Without the bounds (the default: they cost a scan of the robot block's links per update)
+  // a conservative marginal is refused, not made up.
+  EXPECT_THROW((void)exact->marginal(once, true, MarginalMode::Conservative), InvalidArgument);
   EXPECT_EQ(marginalModeName(MarginalMode::Conservative), "conservative");
 }
 

@@ -50,10 +50,11 @@ void bindSeifOptions(py::module_& m) {
                                        &nameOf<SeifOptions::Sparsify>)
       .value("Seif", SeifOptions::Sparsify::Seif)
       .value("Eseif", SeifOptions::Sparsify::Eseif);
-  bindNamedEnum<SeifOptions::Covariance>(o, "Covariance", "'exact' | 'local'", &SeifOptions::parseCovariance,
-                                         &nameOf<SeifOptions::Covariance>)
+  bindNamedEnum<SeifOptions::Covariance>(o, "Covariance", "'exact' | 'local' | 'conservative'",
+                                         &SeifOptions::parseCovariance, &nameOf<SeifOptions::Covariance>)
       .value("Exact", SeifOptions::Covariance::Exact)
-      .value("Local", SeifOptions::Covariance::Local);
+      .value("Local", SeifOptions::Covariance::Local)
+      .value("Conservative", SeifOptions::Covariance::Conservative);
   o.def(py::init<>())
       .def_readwrite("active", &SeifOptions::active, "theta_x: landmarks linked to the robot after each step")
       .def_readwrite("relax", &SeifOptions::relax, "K: landmarks relaxed per step besides the robot and the active ones")
@@ -63,16 +64,18 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("relax_order", &SeifOptions::relax_order, "which K landmarks each step relaxes")
       .def_readwrite("seed", &SeifOptions::seed, "seed of the random choice of relaxed landmarks")
       .def_readwrite("sparsify", &SeifOptions::sparsify, "seif (the paper's conditioning) or eseif")
-      .def_readwrite("covariance", &SeifOptions::covariance, "exact or local marginal covariances")
+      .def_readwrite("covariance", &SeifOptions::covariance, "exact, local or conservative marginal covariances")
       .def_readwrite("beta", &SeifOptions::beta, "ESEIF: landmarks whose observations relocalise the robot")
       .def_readwrite("reanchor", &SeifOptions::reanchor,
                      "linearization=invariant: re-anchor an observed landmark whose mean moved more than this [m]")
       .def_readwrite("blanket", &SeifOptions::blanket,
                      "local marginals: at most this many variables besides the queried ones, strongest links "
                      "first (0: the whole Markov blanket)")
+      .def_readwrite("bounds", &SeifOptions::bounds,
+                     "keep an upper bound on every landmark's covariance (MarginalMode.Conservative)")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta", "reanchor", "blanket"});
+                          "covariance", "beta", "reanchor", "blanket", "bounds"});
       });
 }
 

@@ -77,6 +77,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.i64(o.beta);
   out.f64(o.reanchor);
   out.i64(o.blanket);
+  out.u64(o.bounds ? 1 : 0);
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -99,6 +100,7 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   }
   // Version 2 had no bound: its local marginals used the whole Markov blanket.
   o.blanket = in.version() >= 3 ? static_cast<int>(in.i64In("blanket", 0, kIntMax)) : 0;
+  o.bounds = in.version() >= 4 && in.u64Max("bounds", 1) == 1;  // earlier files kept none
   return o;
 }
 

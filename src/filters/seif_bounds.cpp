@@ -82,25 +82,38 @@ bool conservativeCovariance(const SeifStore& store, std::span<const int> slots, 
   if (llt.info() != Eigen::Success) notPositive(store, "the information of the robot's block");
   ws.Z = llt.solve(ws.E);
   out.noalias() = ws.E.transpose() * ws.Z;
-  // The links leaving I, one term each of (1).
-  using Lever = Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::ColMajor, kMaxLocalDim, 2>;
-  Lever M(q, 2);
+  // The links leaving I, one term each of (1): for member a (rows Z_a of Z) and outside c,
+  // M B_c M^T = Z_a^T (H_ac B_c H_ac^T) Z_a, whose trace is tr(B_c H_ac^T (Z_a Z_a^T) H_ac);
+  // the terms of one member are summed as 2x2 matrices before they meet Z.
   const auto forEachTerm = [&](const auto& term) {
     for (std::size_t i = 0; i < I.size(); ++i) {
       const Eigen::Index r = 3 + 2 * static_cast<Eigen::Index>(i);
+      const Mat2 G = ws.Z.middleRows(r, 2) * ws.Z.middleRows(r, 2).transpose();
       for (const SeifStore::Link& l : store.node(I[i]).links) {
         if (position(l.slot) >= 0) continue;
-        M.noalias() = -ws.Z.middleRows(r, 2).transpose() * l.H;
         const Mat2& B = store.node(l.slot).bound;
-        term((M * B * M.transpose()).trace(), B);
+        term(i, (B * l.H.transpose() * G * l.H).trace(), l.H, B);
       }
     }
   };
   double total = 0.0;  // sum_k sqrt(a_k): w_k = sqrt(a_k) / total
-  forEachTerm([&](double a, const Mat2&) { total += std::sqrt(a); });
-  forEachTerm([&](double a, const Mat2& B) {
-    if (a > 0.0) out.noalias() += (total / std::sqrt(a)) * (M * B * M.transpose());
+  forEachTerm([&](std::size_t, double a, const Mat2&, const Mat2&) { total += std::sqrt(a); });
+  std::size_t member = I.size();
+  Mat2 S = Mat2::Zero();  // sum over the member's terms of H_ac B_c H_ac^T / w_k
+  const auto flush = [&] {
+    if (member == I.size()) return;
+    const Eigen::Index r = 3 + 2 * static_cast<Eigen::Index>(member);
+    out.noalias() += ws.Z.middleRows(r, 2).transpose() * S * ws.Z.middleRows(r, 2);
+  };
+  forEachTerm([&](std::size_t i, double a, const Mat2& H_ac, const Mat2& B) {
+    if (i != member) {
+      flush();
+      member = i;
+      S.setZero();
+    }
+    if (a > 0.0) S.noalias() += (total / std::sqrt(a)) * (H_ac * B * H_ac.transpose());
   });
+  flush();
   out = (0.5 * (out + out.transpose())).eval();
   return true;
 }

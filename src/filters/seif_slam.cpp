@@ -30,6 +30,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
   if (!(options.reanchor >= 0.0) || !std::isfinite(options.reanchor)) {
     throw InvalidArgument("seif: reanchor must be finite and >= 0");
   }
+  if (options_.covariance == SeifOptions::Covariance::Conservative) options_.bounds = true;
   order_.reserve(kMaxLocalLandmarks + 1);
   bound_slots_.reserve(kMaxLocalLandmarks + 1);
   ranking_.reserve(kMaxLocalLandmarks + 1);
@@ -111,14 +112,15 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   anchors_.clear();
   // The covariance bounds (seif_bounds.hpp): the joint bound of the robot and the observed
   // mapped landmarks before any of the step's information, while it fits a local block.
+  const bool bounds = options_.bounds;
   bound_slots_.clear();
   for (const PlannedObservation& p : plan) {
-    if (!p.first && std::find(bound_slots_.begin(), bound_slots_.end(), p.slot) == bound_slots_.end()) {
+    if (bounds && !p.first && std::find(bound_slots_.begin(), bound_slots_.end(), p.slot) == bound_slots_.end()) {
       bound_slots_.push_back(p.slot);
     }
   }
   const std::size_t known = bound_slots_.size();
-  bool tighten = known < static_cast<std::size_t>(kMaxLocalLandmarks);
+  bool tighten = bounds && known < static_cast<std::size_t>(kMaxLocalLandmarks);
   if (tighten) {
     bound_prior_.resize(3 + 2 * static_cast<Eigen::Index>(known), 3 + 2 * static_cast<Eigen::Index>(known));
     tighten = conservativeCovariance(store_, bound_slots_, bound_prior_, bound_ws_);
@@ -131,9 +133,10 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
                                                                sensor.noise(*p.z).inverse(), p.jacobian_landmark,
                                                                anchors, p.constraint);
     // A new landmark's bound from its first observation and the robot's bound now.
-    const Mat2 bound = p.first ? firstSightingBound(conservativePoseCovariance(store_, bound_ws_), info.H) : Mat2::Zero();
+    const bool fresh = bounds && p.first;
+    const Mat2 bound = fresh ? firstSightingBound(conservativePoseCovariance(store_, bound_ws_), info.H) : Mat2::Zero();
     store_.addObservation(p.slot, info.H, info.b);  // links it to the robot: active
-    if (p.first) {
+    if (fresh) {
       store_.setBound(p.slot, bound);
       bound_slots_.push_back(p.slot);
     }
@@ -163,7 +166,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   // Every bound tightened by the step's information (C^-1 + I)^-1, unless a sparsification
   // within the batch changed the robot's conditional between the prior and the information.
   tighten = tighten && sparsifications_ == sparsified && bound_slots_.size() < static_cast<std::size_t>(kMaxLocalLandmarks);
-  if (config_.iterations > 1 && sparsifications_ == sparsified) {
+  if (bounds && config_.iterations > 1 && sparsifications_ == sparsified) {
     // The iterations replaced information that entered before a new landmark's first
     // sighting, so its bound from then may not hold: from the robot's bound now (the new
     // landmark's only link is still the robot).
@@ -244,7 +247,7 @@ void SeifSlam::reanchorIfMoved(int slot) {
 }
 
 void SeifSlam::reanchorLandmark(int slot, const Vec2& to) {
-  store_.setBound(slot, reanchoredBound(store_, slot, to, bound_ws_));
+  if (options_.bounds) store_.setBound(slot, reanchoredBound(store_, slot, to, bound_ws_));
   store_.reanchorLandmark(slot, to);
   invalidateFactor();
 }
@@ -405,6 +408,7 @@ Marginal SeifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalM
     return m;
   }
   if (mode == MarginalMode::Conservative) {
+    requireBounds();
     m.covariance = localCovariance(vars, true);
     return m;
   }
@@ -433,7 +437,15 @@ Eigen::Matrix<double, Eigen::Dynamic, 2> SeifSlam::landmarkCovarianceColumns(int
   return cols;
 }
 
+void SeifSlam::requireBounds() const {
+  if (!options_.bounds) {
+    throw InvalidArgument("seif: conservative marginals need the covariance bounds: seif:bounds=true "
+                          "(or covariance=conservative)");
+  }
+}
+
 void SeifSlam::refreshCovarianceBounds() {
+  requireBounds();
   const SparseMarginals& f = factor();
   for (int s = 0; s < store_.size(); ++s) store_.setBound(s, f.covarianceBlock<2>(StateLayout::landmark(s)));
 }

@@ -74,8 +74,12 @@ class SeifSlam final : public SlamFilter {
   Eigen::VectorXd exactMean() const;
   /// Runs `sweeps` full Gauss-Seidel sweeps of the mean over every variable.
   void relaxMean(int sweeps);
-  /// The upper bound kept on landmark `id`'s marginal covariance (seif_bounds.hpp).
-  Mat2 covarianceBound(int id) const { return store_.node(book_.require(id)).bound; }
+  /// The upper bound kept on landmark `id`'s marginal covariance (seif_bounds.hpp;
+  /// SeifOptions::bounds, else InvalidArgument).
+  Mat2 covarianceBound(int id) const {
+    requireBounds();
+    return store_.node(book_.require(id)).bound;
+  }
   /// Sets every landmark's bound to its exact marginal covariance, the tightest bound: one
   /// sparse factorisation, O(N) at the paper's sparsity (a checkpoint without bounds; a
   /// refresh when the filter has time, e.g. after a loop closure).
@@ -149,6 +153,8 @@ class SeifSlam final : public SlamFilter {
   /// SeifStore::reanchorLandmark, the landmark's covariance bound carried along first
   /// (seif_bounds.hpp: reanchoredBound).
   void reanchorLandmark(int slot, const Vec2& to);
+  /// InvalidArgument unless SeifOptions::bounds.
+  void requireBounds() const;
 
   FilterConfig config_;
   LandmarkBook book_;

@@ -90,9 +90,9 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
     } else {
       n.anchor = n.mu;
     }
-    if (in.version() >= 4) {  // older files: SeifSlam's reader sets the exact marginal
+    if (in.version() >= 4) {  // older files: no bounds (SeifOptions::bounds off)
       in.fixed("landmark covariance bound", n.bound, true);
-      if (!(n.bound.diagonal().minCoeff() > 0.0)) in.fail("a landmark's covariance bound is not positive on its diagonal");
+      if (!(n.bound.diagonal().minCoeff() >= 0.0)) in.fail("a landmark's covariance bound is negative on its diagonal");
     }
     n.active = static_cast<int>(in.i64In("active position", -1, kMaxLocalLandmarks - 1));
     const std::size_t links = in.count("link count", kLinkBytes);
@@ -172,14 +172,7 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
   f.eseif_deferrals_ = static_cast<std::size_t>(in.u64("eseif deferrals"));
   f.eseif_fallbacks_ = static_cast<std::size_t>(in.u64("eseif fallbacks"));
   f.invalidateFactor();
-  if (in.version() < 4) {
-    // No covariance bounds stored: the exact marginals are bounds (seif_bounds.hpp).
-    try {
-      f.refreshCovarianceBounds();
-    } catch (const NumericError& e) {
-      in.fail(e.what());
-    }
-  }
+  // Files before version 4 kept no bounds: they load with SeifOptions::bounds off.
 }
 
 }  // namespace seif
