@@ -153,6 +153,15 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateInvariantIteratedSteps) {
   EXPECT_GT(expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700), 100u);
 }
 
+TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsWithCovarianceBounds) {
+  // The bounds' joint prior, tightening and re-anchoring run on fixed-capacity buffers.
+  seif::SeifOptions options;
+  options.bounds = true;
+  expectNoHeapAllocationInSteadyStateSteps(options);
+  options.active = 12;
+  expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
+}
+
 // Every marginal of a state comes from one factorisation: the first read factors H and
 // computes the selected inverse's columns it needs, later reads compute the rest of their
 // paths, and no read builds an N-row matrix (the landed getter solved with a dense

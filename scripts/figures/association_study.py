@@ -8,8 +8,12 @@ gives the share of observations associated correctly (mean, worst seed), the lan
 the end (spurious and duplicates summed over the seeds), the aligned map RMSE and its ratio
 to the same filter's with known association on the same logs.
 
+The SEIFs gate with the local marginal unless --gate says otherwise (conservative needs
+`bounds=true` in their specs); the EKF always with its exact one.
+
 Run:  /usr/bin/python3 scripts/figures/association_study.py [--worlds park,uniform] [--seeds 5]
-      [--filters ekf,seif,seif:profile=consistent] [--jobs 2] [--out out/association-study]
+      [--filters ekf,seif,seif:profile=consistent] [--gate local|conservative|exact]
+      [--provisional filter,held] [--jobs 2] [--out out/association-study]
 """
 import argparse
 import concurrent.futures
@@ -36,11 +40,18 @@ def main():
     p.add_argument("--worlds", default="park,uniform")
     p.add_argument("--seeds", type=int, default=5)
     p.add_argument("--filters", default="ekf,seif,seif:profile=consistent")
+    p.add_argument("--gate", default="local", choices=["local", "conservative", "exact"])
+    p.add_argument("--provisional", default="filter,held")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--out", default="out/association-study")
     a = p.parse_args()
     worlds = a.worlds.split(",")
-    filters = a.filters.split(",")
+    filters = []  # as the CLI's --filters: an item with '=' and no ':' continues the spec before it
+    for item in a.filters.split(","):
+        if filters and "=" in item and ":" not in item:
+            filters[-1] += "," + item
+        else:
+            filters.append(item)
     seeds = range(1, a.seeds + 1)
     pool = concurrent.futures.ThreadPoolExecutor(a.jobs)
 
@@ -48,11 +59,11 @@ def main():
     list(pool.map(run, [["simulate", *WORLDS[w], "--seed", str(s), "--clutter", "1", "--detection-probability", "0.9",
                          "--out", d] for (w, s), d in data.items()]))
 
-    cases = [("known", "filter")] + [(m, pl) for m in ("nn", "jcbb") for pl in ("filter", "held")]
+    cases = [("known", "filter")] + [(m, pl) for m in ("nn", "jcbb") for pl in a.provisional.split(",")]
     jobs = {}
     for (w, s), d in data.items():
         for f in filters:
-            gate = "exact" if f.startswith("ekf") else "local"
+            gate = "exact" if f.startswith("ekf") else a.gate
             for m, pl in cases:
                 out = os.path.join(a.out, "runs", f"{w}-{s}-{f.replace(':', '_').replace('=', '-')}-{m}-{pl}")
                 flags = ["--drop-unlabelled"] if m == "known" else ["--gate-marginal", gate, "--provisional", pl]
@@ -64,9 +75,9 @@ def main():
         print(f"\r{done}/{len(jobs)} runs", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
 
-    print("| world | filter | association | provisional | correct (worst seed) | landmarks (spurious, duplicates) "
+    print("| world | filter | gate | association | provisional | correct (worst seed) | landmarks (spurious, duplicates) "
           "| map RMSE [m] | known | ratio | s associating |")
-    print("|---|---|---|---|---:|---|---:|---:|---:|---:|")
+    print("|---|---|---|---|---|---:|---|---:|---:|---:|---:|")
     for w in worlds:
         for f in filters:
             known = [metrics(jobs[(w, s, f, "known", "filter")][0])["landmark_rmse"] for s in seeds]
@@ -79,7 +90,8 @@ def main():
                 sp = sum(x["association"]["spurious_landmarks"] for x in r)
                 dup = sum(x["association"]["duplicate_landmarks"] for x in r)
                 sec = sum(x["association"]["seconds"] for x in r) / len(r)
-                print(f"| {w} | {f} | {m} | {pl} | {sum(c) / len(c):.2f} % ({min(c):.2f}) | {lm} ({sp}, {dup}) "
+                gate = "exact" if f.startswith("ekf") else a.gate
+                print(f"| {w} | {f} | {gate} | {m} | {pl} | {sum(c) / len(c):.2f} % ({min(c):.2f}) | {lm} ({sp}, {dup}) "
                       f"| {rmse:.3f} | {k:.3f} | {rmse / k:.2f} | {sec:.2f} |")
 
 

@@ -31,10 +31,10 @@ const std::array<AssociationOption, 12> kOptions = {{
      "(metrics.json \"association\"); docs/association.md",
      [](AssociationOptions& o, std::string_view v) { o.method = parseAssociationMethod(v); },
      [](const AssociationOptions& o) { return std::string(associationMethodName(o.method)); }},
-    {"gate-marginal", "marginal", kChoice, "exact|local", 0, 0, false,
-     "the covariance the gates use: exact (the marginal) or local (H inverted over a blanket around the "
+    {"gate-marginal", "marginal", kChoice, "exact|local|conservative", 0, 0, false,
+     "the covariance the gates use: exact (the marginal), local (H inverted over a blanket around the "
      "pose and the candidates, at most seif:blanket variables more: constant time in the SEIF, smaller "
-     "than the marginal)",
+     "than the marginal) or conservative (an upper bound, constant time in the SEIF with seif:bounds=true)",
      [](AssociationOptions& o, std::string_view v) { o.marginal = parseMarginalMode(v); },
      [](const AssociationOptions& o) { return std::string(marginalModeName(o.marginal)); }},
     {"accept-gate", "accept", kProbability, "", 0, 0, true,
