@@ -81,6 +81,26 @@ def test_marginal_remove_and_merge_from_python(paper_world):
         f.marginal([ids[1]])
 
 
+def test_conservative_marginal_from_python(paper_world):
+    """seif:bounds=true keeps an upper bound: the conservative marginal is never below the exact
+    one; without the bounds it is refused; the bounds survive pickling bit for bit."""
+    data, world = paper_world
+    f = seif.make_filter("seif:bounds=true", seif.start_pose(data), paper_config(world))
+    for step in data.steps[:200]:
+        f.step(step.u, step.observations)
+    ids = f.landmark_ids()[:3]
+    _, exact = f.marginal(ids, mode=seif.MarginalMode.Exact)
+    _, bound = f.marginal(ids, mode=seif.MarginalMode.Conservative)
+    assert np.linalg.eigvalsh(bound - exact).min() >= -1e-9 * np.linalg.eigvalsh(exact).max()
+    again = pickle.loads(pickle.dumps(f))
+    np.testing.assert_array_equal(again.marginal(ids, mode=seif.MarginalMode.Conservative)[1], bound)
+    plain = seif.make_filter("seif", seif.start_pose(data), paper_config(world))
+    plain.step(data.steps[0].u, data.steps[0].observations)
+    with pytest.raises(seif.InvalidArgument, match="bounds"):
+        plain.marginal([], mode=seif.MarginalMode.Conservative)
+    assert seif.SeifOptions().bounds is False
+
+
 def test_run_loop_with_a_python_observer(paper_world):
     data, world = paper_world
 
