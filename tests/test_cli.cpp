@@ -374,5 +374,12 @@ TEST(Cli, AssociationOnAClutteredWorld) {
   EXPECT_GT(n["association"]["correct_fraction"].get<double>(), 0.98);
   EXPECT_GT(n["association"]["provisional_removed"].get<int>(), 0);
   EXPECT_EQ(runCli("run" + data + " --filter ekf --association nn --provisional elsewhere --out " + (dir / "X").string()).status, 1);
+  // Conservative gates keep the SEIF's covariance bounds, as the recorded spec says.
+  const auto cons = runCli("run" + data + " --filter seif --association nn --gate-marginal conservative --out " +
+                           (dir / "C").string());
+  ASSERT_EQ(cons.status, 0) << cons.err;
+  const auto c = readJson(dir / "C" / "metrics.json");
+  EXPECT_NE(c["filter_spec"].get<std::string>().find("bounds=true"), std::string::npos) << c["filter_spec"];
+  EXPECT_EQ(c["association"]["marginal"], "conservative");
   std::filesystem::remove_all(dir);
 }

@@ -127,7 +127,11 @@ BenchMeasurement runBenchCase(const BenchCase& c) {
   FilterConfig filter_config = config;
   filter_config.linearization = c.linearization;
   filter_config.iterations = c.iterations;
-  auto filter = makeFilter(c.filter, start, filter_config, c.seif);
+  SeifOptions seif = c.seif;  // conservative gates read the SEIF's covariance bounds
+  if (c.association.method != AssociationMethod::Known && c.association.marginal == MarginalMode::Conservative) {
+    seif.bounds = true;
+  }
+  auto filter = makeFilter(c.filter, start, filter_config, seif);
   WindowTimer timer(first, m, us, observations);
   // Association, timed per scan in the window (the filter's step time excludes it).
   std::optional<Associator> associator;

@@ -28,7 +28,12 @@ FilterSpec requestedSpec(const RunRequest& request, std::string_view filter) {
   defaults.iterations = request.iterations;
   defaults.seif = request.seif;
   defaults.batch = request.batch;
-  return parseFilterSpec(filter, defaults);
+  FilterSpec spec = parseFilterSpec(filter, defaults);
+  // Conservative gates read the SEIF's covariance bounds: asking for them keeps them.
+  if (request.association.marginal == MarginalMode::Conservative && request.association.method != AssociationMethod::Known) {
+    spec.seif.bounds = true;
+  }
+  return spec;
 }
 
 nlohmann::json optionalJson(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
