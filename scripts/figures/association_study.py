@@ -11,7 +11,7 @@ to the same filter's with known association on the same logs.
 The SEIFs gate with the local marginal unless --gate says otherwise (conservative needs
 `bounds=true` in their specs); the EKF always with its exact one.
 
-Run:  /usr/bin/python3 scripts/figures/association_study.py [--worlds park,uniform] [--seeds 5]
+Run:  PYTHONPATH=build/python /usr/bin/python3 scripts/figures/association_study.py [--worlds park,uniform] [--seeds 5]
       [--filters ekf,seif,seif:profile=consistent] [--gate local|conservative|exact]
       [--provisional filter,held] [--jobs 2] [--out out/association-study]
 """
@@ -21,6 +21,8 @@ import json
 import os
 import subprocess
 import sys
+
+import seif
 
 SEIF = os.environ.get("SEIF", "build/bin/seif")
 WORLDS = {"park": ["--preset", "park"], "uniform": ["--preset", "uniform", "--landmarks", "200"]}
@@ -46,12 +48,7 @@ def main():
     p.add_argument("--out", default="out/association-study")
     a = p.parse_args()
     worlds = a.worlds.split(",")
-    filters = []  # as the CLI's --filters: an item with '=' and no ':' continues the spec before it
-    for item in a.filters.split(","):
-        if filters and "=" in item and ":" not in item:
-            filters[-1] += "," + item
-        else:
-            filters.append(item)
+    filters = seif.split_filter_list(a.filters)  # as the CLI's --filters
     seeds = range(1, a.seeds + 1)
     pool = concurrent.futures.ThreadPoolExecutor(a.jobs)
 

@@ -43,13 +43,7 @@ def main():
     print(f"{args.preset}, seed {args.seed}: {len(steps)} steps")
     print(f"| filter | blanket | lambda_max({ratio_name}) median / p90 / max | d2 exact median / p90 | d2 {args.mode} median / p90 | true pairing outside the 0.99 gate, exact / {args.mode} |")
     print("|---|---:|---|---|---|---|")
-    specs = []  # as the CLI's --filters: an item with '=' and no ':' continues the spec before it
-    for item in args.filters.split(","):
-        if specs and "=" in item and ":" not in item:
-            specs[-1] += "," + item
-        else:
-            specs.append(item)
-    for spec in specs:
+    for spec in seif.split_filter_list(args.filters):
         filters = {b: seif.make_filter(f"{spec}{',' if ':' in spec else ':'}blanket={b}", start, config) for b in blankets}
         ratio = {b: [] for b in blankets}
         d2 = {b: [] for b in blankets}

@@ -41,6 +41,10 @@ ProvisionalPlace parseProvisionalPlace(std::string_view s) {
 
 std::string_view provisionalPlaceName(ProvisionalPlace p) { return p == ProvisionalPlace::Held ? "held" : "filter"; }
 
+bool needsCovarianceBounds(const AssociationOptions& o) {
+  return o.method != AssociationMethod::Known && o.marginal == MarginalMode::Conservative;
+}
+
 namespace {
 
 /// Delta = y_a - y_b with Sigma_Delta = F_Delta Sigma F_Delta^T, F_Delta = [I, -I]:

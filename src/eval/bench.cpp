@@ -127,10 +127,8 @@ BenchMeasurement runBenchCase(const BenchCase& c) {
   FilterConfig filter_config = config;
   filter_config.linearization = c.linearization;
   filter_config.iterations = c.iterations;
-  SeifOptions seif = c.seif;  // conservative gates read the SEIF's covariance bounds
-  if (c.association.method != AssociationMethod::Known && c.association.marginal == MarginalMode::Conservative) {
-    seif.bounds = true;
-  }
+  SeifOptions seif = c.seif;
+  if (needsCovarianceBounds(c.association)) seif.bounds = true;
   auto filter = makeFilter(c.filter, start, filter_config, seif);
   WindowTimer timer(first, m, us, observations);
   // Association, timed per scan in the window (the filter's step time excludes it).

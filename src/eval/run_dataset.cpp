@@ -29,10 +29,7 @@ FilterSpec requestedSpec(const RunRequest& request, std::string_view filter) {
   defaults.seif = request.seif;
   defaults.batch = request.batch;
   FilterSpec spec = parseFilterSpec(filter, defaults);
-  // Conservative gates read the SEIF's covariance bounds: asking for them keeps them.
-  if (request.association.marginal == MarginalMode::Conservative && request.association.method != AssociationMethod::Known) {
-    spec.seif.bounds = true;
-  }
+  if (needsCovarianceBounds(request.association)) spec.seif.bounds = true;
   return spec;
 }
 

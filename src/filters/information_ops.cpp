@@ -6,10 +6,10 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
-#include <queue>
-#include <unordered_map>
 #include <cmath>
+#include <queue>
 #include <string>
+#include <unordered_map>
 
 namespace seif {
 

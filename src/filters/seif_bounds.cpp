@@ -20,9 +20,9 @@ namespace {
 
 Mat2 symmetric(const Mat2& A) { return 0.5 * (A + A.transpose()); }
 
-/// Of two upper bounds A and B of one covariance, the one on the segment between them (every
-/// point of which is a bound too) with the least determinant: never larger than either.
-Mat2 tighterOf(const Mat2& A, const Mat2& B) {
+}  // namespace
+
+Mat2 tighterBound(const Mat2& A, const Mat2& B) {
   // det(B + t (A - B)) = alpha t^2 + beta t + det B over t in [0, 1].
   const Mat2 D = A - B;
   const double alpha = D(0, 0) * D(1, 1) - D(0, 1) * D(1, 0);
@@ -34,8 +34,6 @@ Mat2 tighterOf(const Mat2& A, const Mat2& B) {
   }
   return symmetric(B + t * D);
 }
-
-}  // namespace
 
 BoundWorkspace::BoundWorkspace() { members.reserve(kMaxLocalLandmarks); }
 
@@ -141,7 +139,7 @@ void tightenBounds(SeifStore& store, std::span<const int> slots, const LocalMatr
   // The old bound still holds after the update: the tighter of the two.
   for (std::size_t k = 0; k < slots.size(); ++k) {
     const Eigen::Index r = 3 + 2 * static_cast<Eigen::Index>(k);
-    store.setBound(slots[k], tighterOf(store.node(slots[k]).bound, posterior.block<2, 2>(r, r)));
+    store.setBound(slots[k], tighterBound(store.node(slots[k]).bound, posterior.block<2, 2>(r, r)));
   }
 }
 
@@ -173,7 +171,7 @@ Mat2 reanchoredBound(const SeifStore& store, int slot, const Vec2& to, BoundWork
   const Mat2 split = symmetric((1.0 + e) * B + (1.0 + 1.0 / e) * D);
   if (!joint) return split;
   const Mat2 C_yt = dc * C.block<2, 1>(3, 2).transpose();
-  return tighterOf(symmetric(C.block<2, 2>(3, 3) + C_yt + C_yt.transpose() + D), split);
+  return tighterBound(symmetric(C.block<2, 2>(3, 3) + C_yt + C_yt.transpose() + D), split);
 }
 
 }  // namespace seif

@@ -51,6 +51,10 @@ struct BoundWorkspace {
 bool conservativeCovariance(const SeifStore& store, std::span<const int> slots, Eigen::Ref<Eigen::MatrixXd> out,
                             BoundWorkspace& ws);
 
+/// Of two upper bounds A and B of one 2x2 covariance, the point of the segment between them
+/// (every point of which is a bound too) with the least determinant: never larger than either.
+Mat2 tighterBound(const Mat2& A, const Mat2& B);
+
 /// Bound (1) on the robot's covariance alone (I: the robot and the active landmarks).
 Mat3 conservativePoseCovariance(const SeifStore& store, BoundWorkspace& ws);
 
@@ -58,8 +62,9 @@ Mat3 conservativePoseCovariance(const SeifStore& store, BoundWorkspace& ws);
 /// conservativeCovariance() of the robot and the first slots before it, the slots after those
 /// had no information before it (new landmarks). Each landmark's bound becomes its block of
 /// (prior^-1 + added)^-1, the prior padded with zero information, or its bound before where
-/// that is tighter (every bound before must hold after the update). Allocates nothing. The bounds are left as they were when either matrix
-/// is too ill-conditioned to invert (they still hold: an update only adds information).
+/// that is tighter (every bound before must hold after the update). Allocates nothing. The
+/// bounds are left as they were when either matrix is too ill-conditioned to invert (they
+/// still hold: an update only adds information).
 void tightenBounds(SeifStore& store, std::span<const int> slots, const LocalMatrix& prior, const LocalMatrix& added);
 
 /// The bound of a landmark whose only information is I over [x; y] (its first sighting; the

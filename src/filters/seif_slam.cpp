@@ -1,7 +1,6 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
 #include "core/sparse_marginals.hpp"
-#include "filters/seif_bounds.hpp"
 #include "filters/seif_slam.hpp"
 
 #include <Eigen/Cholesky>
@@ -287,14 +286,13 @@ void SeifSlam::mergeLandmarks(int keep, int drop) {
     }
   }
   // Conditioning on y_keep = y_drop leaves the merged landmark's covariance below either
-  // one's: the tighter bound stays.
-  const Mat2 bound = store_.node(k).bound.trace() <= store_.node(d).bound.trace() ? store_.node(k).bound
-                                                                                  : store_.node(d).bound;
+  // one's: both bounds hold, and so does the tightest point between them.
+  const Mat2 bound = tighterBound(store_.node(k).bound, store_.node(d).bound);
   store_.mergeLandmarks(k, d);
   book_.removeSlot(d);
   invalidateFactor();
   const int kept = book_.find(keep);  // keep may have moved into d's slot
-  store_.setBound(kept, bound);
+  if (options_.bounds) store_.setBound(kept, bound);
   if (options_.mean == SeifOptions::Mean::Exact) {
     recoverExactMean();
   } else {

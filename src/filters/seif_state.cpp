@@ -2,7 +2,6 @@
 // slot order with its links in their own vector order, the robot links in theirs, the
 // counters and the random engine's exact state.
 #include "checkpoint_access.hpp"
-#include <seif/core/errors.hpp>
 
 #include <algorithm>
 #include <sstream>
@@ -172,7 +171,6 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
   f.eseif_deferrals_ = static_cast<std::size_t>(in.u64("eseif deferrals"));
   f.eseif_fallbacks_ = static_cast<std::size_t>(in.u64("eseif fallbacks"));
   f.invalidateFactor();
-  // Files before version 4 kept no bounds: they load with SeifOptions::bounds off.
 }
 
 }  // namespace seif

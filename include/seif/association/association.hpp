@@ -54,9 +54,10 @@ struct AssociationOptions {
   /// Chi-square probability of the new-landmark gate: an observation farther than it from
   /// every landmark starts a new one; between the gates it is dropped as ambiguous.
   double new_landmark = 0.9999;
-  /// The covariance the gates use (SlamFilter::marginal): Exact, or Local (constant time in
+  /// The covariance the gates use (SlamFilter::marginal): Exact, Local (constant time in
   /// the SEIF, its blanket bounded by SeifOptions::blanket; conditions on the blanket's
-  /// outside, so it is never larger than the marginal).
+  /// outside, so it is never larger than the marginal) or Conservative (an upper bound: the
+  /// SEIF needs SeifOptions::bounds, see needsCovarianceBounds()).
   MarginalMode marginal = MarginalMode::Exact;
   /// A new landmark stays provisional until it has been seen `confirm` times (its first
   /// sighting included) within `window` scans (steps with observations) of its first;
@@ -83,6 +84,10 @@ struct AssociationOptions {
   int refresh = 16;
   double slack = 0.0;  ///< 0: the radius of the new-landmark gate at the first scan
 };
+
+/// Whether these options gate with conservative marginals, which a SEIF answers only with
+/// its covariance bounds kept (SeifOptions::bounds): `seif run` and `seif bench` turn them on.
+bool needsCovarianceBounds(const AssociationOptions& o);
 
 /// One option of data association. The table of them (associationOptions()) is the single
 /// description the CLI's flags (`--<key>`), metrics.json's "association" object and Python's

@@ -92,10 +92,11 @@ enum class MarginalMode {
   /// strongest links up to SeifOptions::blanket variables, so it is constant time.
   Local,
   /// An upper bound on the marginal in the Loewner order, never smaller than Exact: for
-  /// gates that must not reject the right landmark. The SEIF keeps a bound per landmark and
-  /// derives the robot's from its information (covariance intersection over the active
-  /// landmarks), in constant time (docs/consistency.md, "Conservative covariances"); the
-  /// dense filters and the batch return the exact marginal, which bounds itself.
+  /// gates that must not reject the right landmark. The SEIF (with SeifOptions::bounds) keeps
+  /// a bound per landmark, inverts H over the bounded blanket and bounds the share of the
+  /// links leaving it by covariance intersection, in constant time (docs/consistency.md,
+  /// "Conservative covariances"); the dense filters and the batch return the exact marginal,
+  /// which bounds itself.
   Conservative,
 };
 
@@ -184,8 +185,9 @@ class SlamFilter {
   ///   batch Exact (Local is Exact): solves with the KKT factor after finish(); before it
   ///         the initial guess's (an EKF's).
   /// Local conditions on everything outside the blanket, so it is never larger than the
-  /// marginal; Conservative is never smaller. On the simulated worlds the SEIF's local S of a measurement is within 6 % of
-  /// the exact one at the median, and rejects as many true pairings (docs/association.md).
+  /// marginal; Conservative is never smaller. On the simulated worlds the SEIF's local S of a
+  /// measurement is within 6 % of the exact one at the median, and rejects as many true
+  /// pairings (docs/association.md).
   /// Throws UnknownLandmark for an id not in the map.
   virtual Marginal marginal(std::span<const int> landmarks, bool pose = true,
                             MarginalMode mode = MarginalMode::Exact) const = 0;
