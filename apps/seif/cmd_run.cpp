@@ -131,6 +131,12 @@ void run(const RunArgs& args) {
                 a.new_landmarks, a.provisional_removed, a.merged, a.ambiguous_dropped, a.landmarks_final, a.spurious_landmarks,
                 a.duplicate_landmarks, a.seconds,
                 a.jcbb_truncated > 0 ? (", " + std::to_string(a.jcbb_truncated) + " JCBB searches truncated").c_str() : "");
+    if (const auto& c = r.association_ceiling; c && c->observations > 0) {
+      std::printf("    ceiling (the true map seen from the true pose): %.2f %% individually, %.2f %% jointly of %zu "
+                  "labelled observations\n",
+                  100.0 * double(c->individual) / double(c->observations),
+                  100.0 * double(c->joint) / double(c->observations), c->observations);
+    }
   }
   if (out.rejected_observations > 0) {
     std::printf("  rejected %zu gross outlier observation%s (beyond %g sigma of the measurement noise)\n",

@@ -21,6 +21,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/core/types.hpp>
 #include <seif/core/version.hpp>
+#include <seif/eval/association_ceiling.hpp>
 #include <seif/eval/bench.hpp>
 #include <seif/eval/consistency.hpp>
 #include <seif/eval/paper.hpp>

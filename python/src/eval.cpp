@@ -3,6 +3,7 @@
 // release the GIL; progress callbacks re-acquire it (bindings.hpp: pythonCallback).
 #include "bindings.hpp"
 
+#include <seif/eval/association_ceiling.hpp>
 #include <seif/eval/bench.hpp>
 #include <seif/eval/consistency.hpp>
 #include <seif/eval/paper.hpp>
@@ -97,6 +98,31 @@ void bindRun(py::module_& m) {
                           "trajectory_covariances"});
       });
 
+  py::class_<AssociationCeilingOptions>(m, "AssociationCeilingOptions",
+                                        "association_ceiling()'s gate (d²) and node bound per scan")
+      .def(py::init<>())
+      .def_readwrite("gate", &AssociationCeilingOptions::gate)
+      .def_readwrite("max_nodes", &AssociationCeilingOptions::max_nodes);
+  py::class_<AssociationCeiling>(m, "AssociationCeiling",
+                                 "The labelled observations the true map seen from the true pose associates right: "
+                                 "individually (most likely landmark) and jointly (the scan's most likely one-to-one "
+                                 "assignment)")
+      .def_readonly("observations", &AssociationCeiling::observations)
+      .def_readonly("individual", &AssociationCeiling::individual)
+      .def_readonly("joint", &AssociationCeiling::joint)
+      .def_readonly("scans", &AssociationCeiling::scans)
+      .def_readonly("joint_truncated", &AssociationCeiling::joint_truncated)
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"observations", "individual", "joint", "scans"}); });
+  m.def(
+      "association_ceiling",
+      [](EventSource& source, const MeasurementModel& sensor, const AssociationCeilingOptions& options) {
+        py::gil_scoped_release release;
+        return associationCeiling(source, sensor, options);
+      },
+      py::arg("source"), py::arg("sensor"), py::arg("options") = AssociationCeilingOptions{},
+      "Reads the source to its end; how many labelled observations the true map seen from the true pose "
+      "associates right (None without ground-truth poses or landmarks).");
+
   py::class_<RunReport>(m, "RunReport", "What run_dataset() measured.")
       .def_readonly("info", &RunReport::info)
       .def_readonly("output", &RunReport::output)
@@ -104,6 +130,8 @@ void bindRun(py::module_& m) {
       .def_readonly("landmarks", &RunReport::landmarks)
       .def_readonly("smoother", &RunReport::smoother, "SmootherReport of a batch or smooth run, else None")
       .def_readonly("association", &RunReport::association, "AssociationCounts of an nn or jcbb run, else None")
+      .def_readonly("association_ceiling", &RunReport::association_ceiling,
+                    "AssociationCeiling of an nn or jcbb run on data with ground truth, else None")
       .def_readonly("filter_errors", &RunReport::filter_errors, "smooth: the filter's errors before the batch")
       .def_readonly("filter_map_distance", &RunReport::filter_map_distance,
                     "smooth: RMS distance of the filter's map from the batch's [m]")

@@ -257,3 +257,22 @@ def test_the_association_option_table_names_every_attribute():
             assert int(row["default"]) == value
         else:
             assert row["default"] in row["choices"].split("|")
+
+
+def test_the_association_ceiling_from_python():
+    """What the true map seen from the true pose associates: near all on the park, about nine
+    in ten at the paper's density (docs/association.md, "The ceiling")."""
+    fractions = {}
+    for preset, landmarks in (("park", 0), ("uniform", 200)):
+        config = seif.preset_config(preset, landmarks, 300, 1)
+        config.clutter = 1.0
+        source = seif.RobotLogSource(seif.simulate(config), config.noise)
+        ceiling = seif.association_ceiling(source, source.info.sensor)
+        assert ceiling.observations > 500 and ceiling.scans > 100
+        assert ceiling.joint_truncated == 0
+        fractions[preset] = ceiling.individual / ceiling.observations
+    assert fractions["park"] > 0.99
+    assert 0.8 < fractions["uniform"] < 0.95
+    log = seif.simulate(seif.preset_config("park", 0, 50, 1))
+    log.groundtruth = []
+    assert seif.association_ceiling(seif.RobotLogSource(log, seif.NoiseModel()), seif.RangeBearingModel(0.5, 0.03)) is None

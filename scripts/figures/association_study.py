@@ -6,7 +6,10 @@ Each world (park, uniform-200) is simulated for seeds 1-5 with one false detecti
 `nn` and `jcbb`, with provisional landmarks in the filter and held outside it. The table
 gives the share of observations associated correctly (mean, worst seed), the landmarks at
 the end (spurious and duplicates summed over the seeds), the aligned map RMSE and its ratio
-to the same filter's with known association on the same logs.
+to the same filter's with known association on the same logs. A second table gives each
+world's ceiling: the share the true map seen from the true pose associates right
+(eval/association_ceiling.hpp; metrics.json association.ceiling), which no associator can
+expect to beat.
 
 The SEIFs gate with the local marginal unless --gate says otherwise (conservative needs
 `bounds=true` in their specs); the EKF always with its exact one.
@@ -90,6 +93,16 @@ def main():
                 gate = "exact" if f.startswith("ekf") else a.gate
                 print(f"| {w} | {f} | {gate} | {m} | {pl} | {sum(c) / len(c):.2f} % ({min(c):.2f}) | {lm} ({sp}, {dup}) "
                       f"| {rmse:.3f} | {k:.3f} | {rmse / k:.2f} | {sec:.2f} |")
+
+    print()
+    print("| world | ceiling, individually (worst seed) | ceiling, jointly (worst seed) |")
+    print("|---|---:|---:|")
+    for w in worlds:
+        ceilings = [metrics(jobs[(w, s, filters[0], "nn", a.provisional.split(",")[0])][0])["association"]["ceiling"]
+                    for s in seeds]
+        ind = [100 * c["individual_fraction"] for c in ceilings]
+        joint = [100 * c["joint_fraction"] for c in ceilings]
+        print(f"| {w} | {sum(ind) / len(ind):.2f} % ({min(ind):.2f}) | {sum(joint) / len(joint):.2f} % ({min(joint):.2f}) |")
 
 
 if __name__ == "__main__":

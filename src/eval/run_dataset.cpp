@@ -35,6 +35,23 @@ FilterSpec requestedSpec(const RunRequest& request, std::string_view filter) {
 
 nlohmann::json optionalJson(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
 
+nlohmann::json ceilingJson(const std::optional<AssociationCeiling>& c) {
+  if (!c) return nullptr;
+  auto fraction = [&](std::size_t n) {
+    return c->observations == 0 ? nlohmann::json(nullptr) : nlohmann::json(double(n) / double(c->observations));
+  };
+  return {{"observations", c->observations},
+          {"individual", c->individual},
+          {"individual_fraction", fraction(c->individual)},
+          {"joint", c->joint},
+          {"joint_fraction", fraction(c->joint)},
+          {"scans", c->scans},
+          {"joint_truncated", c->joint_truncated},
+          {"definition", "the labelled observations associated with the true landmarks seen from the true pose: "
+                         "each to its most likely landmark (individual), or by the scan's most likely one-to-one "
+                         "assignment (joint); what a perfect map and pose would get"}};
+}
+
 std::string metricsJson(const RunRequest& request, const RunReport& r) {
   const RunOutput& out = r.output;
   std::vector<double> sorted = out.step_seconds;
@@ -113,6 +130,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
         {"jcbb_truncated", a.jcbb_truncated},
         {"landmarks_final", a.landmarks_final},
         {"seconds", a.seconds},
+        {"ceiling", ceilingJson(r.association_ceiling)},
         {"scoring", "each landmark is labelled with the truth id most of its observations carry (the older of "
                     "two with one label keeps it); scored: observations with a truth id in a landmark at the end; "
                     "correct: in the landmark labelled with their truth"}});
@@ -239,6 +257,10 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   report.filter = checkpointing.values["filter"];
   report.info = source->info();
   source.reset();
+  if (associating && report.info.has_groundtruth && !report.info.landmarks.empty()) {
+    const auto reread = openDataset(request.dataset, request.format, request.dataset_options);
+    report.association_ceiling = associationCeiling(*reread, *report.info.sensor);
+  }
   if (report.output.steps == 0) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
   report.seconds_wall = secondsSince(start);
   report.landmarks = filter->landmarkIds().size();

@@ -11,6 +11,7 @@
 // rigid 2-D alignment and as estimated); gps_rmse and dead_reckoning_gps_rmse against GPS
 // when the dataset has it (trajectory interpolated at the GPS stamps inside its span, after
 // the best rigid 2-D alignment, metres).
+#include <seif/eval/association_ceiling.hpp>
 #include <seif/eval/run.hpp>
 #include <seif/filters/batch_options.hpp>
 #include <seif/filters/seif_options.hpp>
@@ -73,6 +74,9 @@ struct RunReport {
   std::optional<RunErrors> filter_errors;     ///< with `smooth`: the filter's, before the batch
   std::optional<double> filter_map_distance;  ///< with `smooth`: RMS distance of the filter's map from the batch's [m]
   std::optional<AssociationCounts> association;  ///< with nn or jcbb (or drop_unlabelled): what the association did
+  /// With nn or jcbb on data with ground-truth poses and landmarks: what the true map and
+  /// poses would associate (eval/association_ceiling.hpp).
+  std::optional<AssociationCeiling> association_ceiling;
   double seconds_wall = 0.0;     ///< open, read and filter
   double seconds_outputs = 0.0;  ///< trajectory, map with covariances, metrics
 };
