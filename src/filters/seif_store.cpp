@@ -3,6 +3,8 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
+#include <bitset>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -351,6 +353,29 @@ void SeifStore::setMean(const Eigen::VectorXd& mu) {
 
 // ---------------------------------------------------------------- the local block ------
 
+class SeifStore::GatheredMarks {
+ public:
+  explicit GatheredMarks(SeifStore& store) : store_(store) {
+    for (std::size_t i = 0; i < store.gathered_.size(); ++i) {
+      int& mark = store.nodes_[static_cast<std::size_t>(store.gathered_[i])].gathered;
+      if (mark >= 0) {
+        clear(i);
+        throw InvalidArgument("seif: a landmark listed twice in a local block");
+      }
+      mark = static_cast<int>(i);
+    }
+  }
+  ~GatheredMarks() { clear(store_.gathered_.size()); }
+  GatheredMarks(const GatheredMarks&) = delete;
+  GatheredMarks& operator=(const GatheredMarks&) = delete;
+
+ private:
+  void clear(std::size_t count) {
+    for (std::size_t i = 0; i < count; ++i) store_.nodes_[static_cast<std::size_t>(store_.gathered_[i])].gathered = -1;
+  }
+  SeifStore& store_;
+};
+
 void SeifStore::gather(std::span<const int> slots) {
   gathered_.assign(slots.begin(), slots.end());
   gatherListed();
@@ -368,6 +393,7 @@ void SeifStore::gatherListed() {
     throw InvalidArgument("seif: a local block holds at most " + std::to_string(kMaxLocalLandmarks) +
                                 " landmarks");
   }
+  const GatheredMarks marks(*this);
   const int n = 3 + 2 * k;
   local_H_.setZero(n, n);
   local_b_.resize(n);
@@ -387,12 +413,12 @@ void SeifStore::gatherListed() {
       local_H_.block<3, 2>(0, r) = H_xl;
       local_H_.block<2, 3>(r, 0) = H_xl.transpose();
     }
-    for (int j = i + 1; j < k; ++j) {
-      if (const Mat2* h = findLink(a, gathered_[static_cast<std::size_t>(j)])) {
-        const int c = 3 + 2 * j;
-        local_H_.block<2, 2>(r, c) = *h;
-        local_H_.block<2, 2>(c, r) = h->transpose();
-      }
+    for (const Link& l : n_a.links) {  // H_{a,c} from a's side for each later c in the block
+      const int j = nodes_[static_cast<std::size_t>(l.slot)].gathered;
+      if (j <= i) continue;
+      const int c = 3 + 2 * j;
+      local_H_.block<2, 2>(r, c) = l.H;
+      local_H_.block<2, 2>(c, r) = l.H.transpose();
     }
   }
   blocks_touched_ += static_cast<std::size_t>((k + 1) * (k + 1));
@@ -403,22 +429,31 @@ void SeifStore::scatter() {
   H_xx_ = local_H_.topLeftCorner<3, 3>();
   b_x_ = local_b_.head<3>();
   mu_x_ = local_mu_.head<3>();
-  for (int i = 0; i < k; ++i) {
-    const int a = gathered_[static_cast<std::size_t>(i)];
-    Node& node = write(a);
-    const int r = 3 + 2 * i;
-    node.H = local_H_.block<2, 2>(r, r);
-    node.b = local_b_.segment<2>(r);
-    node.mu = local_mu_.segment<2>(r);
-    if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
+  // Each pair's block is written from the upper triangle (i < j), H_{c,a} as its transpose.
+  std::array<std::bitset<kMaxLocalLandmarks>, kMaxLocalLandmarks> linked{};
+  {
+    const GatheredMarks marks(*this);
+    for (int i = 0; i < k; ++i) {
+      Node& node = write(gathered_[static_cast<std::size_t>(i)]);
+      const int r = 3 + 2 * i;
+      node.H = local_H_.block<2, 2>(r, r);
+      node.b = local_b_.segment<2>(r);
+      node.mu = local_mu_.segment<2>(r);
+      if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
+      for (Link& l : node.links) {
+        const int j = nodes_[static_cast<std::size_t>(l.slot)].gathered;
+        if (j < 0) continue;
+        linked[static_cast<std::size_t>(std::min(i, j))].set(static_cast<std::size_t>(std::max(i, j)));
+        l.H = i < j ? Mat2(local_H_.block<2, 2>(r, 3 + 2 * j)) : Mat2(local_H_.block<2, 2>(3 + 2 * j, r).transpose());
+      }
+    }
+  }
+  for (int i = 0; i < k; ++i) {  // motion creates links among the active landmarks (paper fig. 4)
     for (int j = i + 1; j < k; ++j) {
-      const int c = gathered_[static_cast<std::size_t>(j)];
-      const Mat2 block = local_H_.block<2, 2>(r, 3 + 2 * j);
-      if (Mat2* h = link(a, c)) {
-        *h = block;
-        *link(c, a) = block.transpose();
-      } else if (block.cwiseAbs().maxCoeff() > 0.0) {
-        addToLink(a, c, block);  // motion creates links among the active landmarks (paper fig. 4)
+      if (linked[static_cast<std::size_t>(i)].test(static_cast<std::size_t>(j))) continue;
+      const Mat2 block = local_H_.block<2, 2>(3 + 2 * i, 3 + 2 * j);
+      if (block.cwiseAbs().maxCoeff() > 0.0) {
+        addToLink(gathered_[static_cast<std::size_t>(i)], gathered_[static_cast<std::size_t>(j)], block);
       }
     }
   }

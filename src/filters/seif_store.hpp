@@ -38,6 +38,7 @@ class SeifStore {
     /// (seif_bounds.hpp: MarginalMode::Conservative); zero until its first sighting sets it.
     Mat2 bound = Mat2::Zero();
     int active = -1;  // position in robotLinks(), or -1 when passive
+    int gathered = -1;  // position in the local block while gather()/scatter() run, else -1 (in padding: no size)
     std::vector<Link> links;
     long journaled = -1;       // the transaction that saved it whole last (beginTransaction())
     long mean_journaled = -1;  // ... that saved its mean last
@@ -190,6 +191,9 @@ class SeifStore {
   /// H_{a,c} for a change (write(a)), or nullptr when they are not linked.
   Mat2* link(int a, int c);
   void gatherListed();  // gather() of gathered_
+  /// Marks each gathered landmark with its position (Node::gathered) for the life of the
+  /// object, so that a node's links to the block are found in one pass over its links.
+  class GatheredMarks;
   /// Links landmark `slot` to the robot (activates it) with a zero block; its position.
   int activate(int slot);
   /// The re-anchoring of reanchorRobot()/reanchorLandmark(): q = H dc over the variable's
