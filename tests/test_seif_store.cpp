@@ -234,3 +234,20 @@ TEST(SeifStore, RejectsABlockLargerThanTheLocalBuffers) {
   store.gather(slots);
   EXPECT_EQ(store.localH().rows(), kMaxLocalDim);
 }
+
+namespace {
+
+TEST(SeifStore, RejectsALandmarkListedTwiceInABlockAndStaysUsable) {
+  Fixture f(4);
+  const Eigen::MatrixXd H_before(f.store.sparseInformation());
+  const std::vector<int> twice{0, 2, 0};
+  EXPECT_THROW(f.store.gather(twice), seif::InvalidArgument);
+  for (int s = 0; s < 4; ++s) EXPECT_EQ(f.store.node(s).gathered, -1) << s;
+  const std::vector<int> order{2, 0, 1};
+  f.store.gather(order);
+  f.store.scatter();
+  for (int s = 0; s < 4; ++s) EXPECT_EQ(f.store.node(s).gathered, -1) << s;
+  EXPECT_EQ(Eigen::MatrixXd(f.store.sparseInformation()), H_before);
+}
+
+}  // namespace
