@@ -27,21 +27,24 @@ class SeifStore {
     Mat32 H;         // H_{x, landmark}
     long last_seen;  // step() of its last observation
   };
+  // The fields are ordered by when they are read. The first 64 bytes hold what a neighbour's
+  // visit reads (mu, active, gathered) with H; the next 64 what relaxing the node itself adds
+  // (b, links); the bound, used only with SeifOptions::bounds, comes last. 160 bytes.
   struct Node {
+    Vec2 mu = Vec2::Zero();
+    int active = -1;    // position in robotLinks(), or -1 when passive
+    int gathered = -1;  // position in the local block while gather()/scatter() run, else -1
+    long mean_journaled = -1;  // the transaction that saved its mean last
     Mat2 H = Mat2::Zero();
     Vec2 b = Vec2::Zero();
-    Vec2 mu = Vec2::Zero();
+    std::vector<Link> links;
+    long journaled = -1;  // the transaction that saved it whole last (beginTransaction())
     /// Where H is anchored for this landmark (Linearization::Invariant; src/filters/invariant.hpp):
     /// its mean when it entered or was last re-anchored.
     Vec2 anchor = Vec2::Zero();
     /// An upper bound (Loewner order) on its marginal covariance under H, kept by the filter
     /// (seif_bounds.hpp: MarginalMode::Conservative); zero until its first sighting sets it.
     Mat2 bound = Mat2::Zero();
-    int active = -1;  // position in robotLinks(), or -1 when passive
-    int gathered = -1;  // position in the local block while gather()/scatter() run, else -1 (in padding: no size)
-    std::vector<Link> links;
-    long journaled = -1;       // the transaction that saved it whole last (beginTransaction())
-    long mean_journaled = -1;  // ... that saved its mean last
   };
 
   /// A map without landmarks: the robot's information H_xx at mean mu_x (b_x = H_xx mu_x).
@@ -171,10 +174,11 @@ class SeifStore {
     solveLocalMean();
   }
   /// Starts fetching landmark `slot`'s node into the cache (round 1 of relaxLandmarks()).
-  void prefetch(int slot) const {
+  void prefetch(int slot) const {  // its first 128 bytes: all but the bound (Node)
     const char* p = reinterpret_cast<const char*>(&nodes_[static_cast<std::size_t>(slot)]);
     __builtin_prefetch(p);
-    __builtin_prefetch(p + sizeof(Node) - 1);
+    __builtin_prefetch(p + 64);
+    __builtin_prefetch(p + 127);
   }
   /// relaxLandmark() of each of `slots` (prefetched), in order. Each relaxation chases three
   /// dependent pointers: node, links, neighbours' means. Their memory is prefetched first,
