@@ -257,12 +257,12 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   report.filter = checkpointing.values["filter"];
   report.info = source->info();
   source.reset();
-  if (associating && report.info.has_groundtruth && !report.info.landmarks.empty()) {
+  if (report.output.steps == 0) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
+  report.seconds_wall = secondsSince(start);
+  if (associating && report.info.has_groundtruth && !report.info.landmarks.empty()) {  // an evaluation: not timed
     const auto reread = openDataset(request.dataset, request.format, request.dataset_options);
     report.association_ceiling = associationCeiling(*reread, *report.info.sensor);
   }
-  if (report.output.steps == 0) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
-  report.seconds_wall = secondsSince(start);
   report.landmarks = filter->landmarkIds().size();
   DatasetInfo scored_info = report.info;
   if (associating) {  // the associator's landmarks against the true landmark each was started from
