@@ -44,3 +44,13 @@ def test_victoria_park(source_dir, victoria_park_isam, tmp_path):
     assert "wrote" in out
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert png.stat().st_size > 10_000
+
+
+def test_unknown_association(source_dir, tmp_path):
+    out = run_example(source_dir, "unknown_association.py", tmp_path, 400)
+    right = re.search(r"([0-9.]+) % associated right", out)
+    ceiling = re.search(r"ceiling: ([0-9.]+) % individually, ([0-9.]+) % jointly", out)
+    assert right and ceiling, out
+    # On the park, clutter and misses included, nearest neighbour is close to the ceiling.
+    assert float(ceiling.group(1)) > 98.5
+    assert float(right.group(1)) > float(ceiling.group(1)) - 2.0
