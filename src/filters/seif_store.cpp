@@ -513,10 +513,13 @@ void SeifStore::solveLocalMean() {
   local_rhs_ = local_b_;
   for (std::size_t i = 0; i < gathered_.size(); ++i) {
     const Node& n = node(gathered_[i]);
+    const auto row = 3 + 2 * static_cast<Eigen::Index>(i);
+    Vec2 rhs = local_rhs_.segment<2>(row);  // summed in a register, in the links' order
     for (const Link& l : n.links) {
       const Node& other = node(l.slot);
-      if (other.active < 0) local_rhs_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i)).noalias() -= l.H * other.mu;
+      if (other.active < 0) rhs.noalias() -= l.H * other.mu;
     }
+    local_rhs_.segment<2>(row) = rhs;
     blocks_touched_ += n.links.size();
   }
   Eigen::LLT<LocalMatrix> llt(local_H_);
