@@ -170,6 +170,7 @@ TEST(AssociationCeiling, ReportedByRunDatasetForSimulatedWorlds) {
     const AssociationCeiling& c = *report.association_ceiling;
     EXPECT_GT(c.observations, 0u);
     EXPECT_GE(c.joint + c.observations / 100, c.individual);  // the joint test is rarely worse
+    EXPECT_LE(report.association->correct, c.observations);   // the same labelled observations
     return double(c.individual) / double(c.observations);
   };
   EXPECT_GT(fraction(WorldPreset::Park, 0, 400), 0.99);

@@ -133,9 +133,10 @@ void run(const RunArgs& args) {
                 a.jcbb_truncated > 0 ? (", " + std::to_string(a.jcbb_truncated) + " JCBB searches truncated").c_str() : "");
     if (const auto& c = r.association_ceiling; c && c->observations > 0) {
       std::printf("    ceiling (the true map seen from the true pose): %.2f %% individually, %.2f %% jointly of %zu "
-                  "labelled observations\n",
+                  "labelled observations; this run %.2f %% of them\n",
                   100.0 * double(c->individual) / double(c->observations),
-                  100.0 * double(c->joint) / double(c->observations), c->observations);
+                  100.0 * double(c->joint) / double(c->observations), c->observations,
+                  100.0 * double(a.correct) / double(c->observations));
     }
   }
   if (out.rejected_observations > 0) {

@@ -35,7 +35,9 @@ FilterSpec requestedSpec(const RunRequest& request, std::string_view filter) {
 
 nlohmann::json optionalJson(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
 
-nlohmann::json ceilingJson(const std::optional<AssociationCeiling>& c) {
+// `run_correct_fraction`: the run's correct associations over the same labelled observations
+// (its own correct_fraction is over those it kept, which dropping ambiguous ones raises).
+nlohmann::json ceilingJson(const std::optional<AssociationCeiling>& c, const AssociationCounts& run) {
   if (!c) return nullptr;
   auto fraction = [&](std::size_t n) {
     return c->observations == 0 ? nlohmann::json(nullptr) : nlohmann::json(double(n) / double(c->observations));
@@ -45,6 +47,7 @@ nlohmann::json ceilingJson(const std::optional<AssociationCeiling>& c) {
           {"individual_fraction", fraction(c->individual)},
           {"joint", c->joint},
           {"joint_fraction", fraction(c->joint)},
+          {"run_correct_fraction", fraction(run.correct)},
           {"scans", c->scans},
           {"joint_truncated", c->joint_truncated},
           {"definition", "the labelled observations associated with the true landmarks seen from the true pose: "
@@ -130,7 +133,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
         {"jcbb_truncated", a.jcbb_truncated},
         {"landmarks_final", a.landmarks_final},
         {"seconds", a.seconds},
-        {"ceiling", ceilingJson(r.association_ceiling)},
+        {"ceiling", ceilingJson(r.association_ceiling, a)},
         {"scoring", "each landmark is labelled with the truth id most of its observations carry (the older of "
                     "two with one label keeps it); scored: observations with a truth id in a landmark at the end; "
                     "correct: in the landmark labelled with their truth"}});

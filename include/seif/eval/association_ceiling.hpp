@@ -5,9 +5,11 @@
 // With the map and the pose known exactly, the observations of one instant are independent
 // given their landmarks, so the most likely landmark of an observation is the one whose
 // predicted measurement h(x_true, y_j) is nearest in the Mahalanobis distance of the sensor
-// noise R (the normaliser is the same for every candidate). An associator that has only
-// estimates of x and y, and the same sensor, cannot expect to do better than the posterior
-// with the truth known; what it gets right beyond these counts it gets by luck.
+// noise R (the normaliser is the same for every candidate). It is a reference, not a proof
+// of a bound: it uses the likelihood alone (an associator that also knows the sensor's
+// footprint, which landmarks could have been seen at all, can do a few points better), and
+// it counts every labelled observation, where an associator's correct_fraction counts only
+// those it kept (dropping ambiguous ones raises that; compare with correct / observations).
 //   individual  each observation to its most likely true landmark (what a nearest-neighbour
 //               gate would do with a perfect map);
 //   joint       the scan's most likely one-to-one assignment of observations to true
