@@ -79,6 +79,32 @@ TEST(Nees, BothFramesAgreeWithTheDenseCovariance) {
   EXPECT_GT(std::abs(p.landmark_relative - lm), 1e-3 * lm);
 }
 
+TEST(Nees, AGivenMeanIsReadInTheStateOrderWithTheFiltersCovariances) {
+  const TwoLandmarks w;
+  // The filter's own mean given explicitly: the same NEES, to rounding.
+  const Eigen::VectorXd own = w.ekf.mean();
+  const seif::NeesPoint a = seif::measureNees(w.ekf, w.true_pose, w.truth);
+  const seif::NeesPoint b = seif::measureNees(w.ekf, w.true_pose, w.truth, &own);
+  EXPECT_NEAR(b.landmark, a.landmark, 1e-12 * a.landmark);
+  EXPECT_NEAR(b.landmark_relative, a.landmark_relative, 1e-12 * a.landmark_relative);
+  // Another mean: its errors against the same (dense) covariance, slot by slot.
+  Eigen::VectorXd m = own;
+  m.segment<2>(5) += seif::Vec2(0.01, -0.02);  // landmark 9 (the second slot)
+  m(2) += 0.005;
+  const seif::NeesPoint c = seif::measureNees(w.ekf, w.true_pose, w.truth, &m);
+  const Eigen::MatrixXd S = w.ekf.covariance();
+  auto nees = [](const Eigen::VectorXd& d, const Eigen::MatrixXd& P) { return d.dot(P.ldlt().solve(d)); };
+  Eigen::VectorXd t(7);
+  t << w.true_pose, w.truth.at(7), w.truth.at(9);
+  const Eigen::VectorXd e = m - t;
+  EXPECT_NEAR(c.pose, nees(e.head(3), S.topLeftCorner(3, 3)), 1e-9 * c.pose);
+  const double lm = 0.5 * (nees(e.segment(3, 2), S.block(3, 3, 2, 2)) + nees(e.segment(5, 2), S.block(5, 5, 2, 2)));
+  EXPECT_NEAR(c.landmark, lm, 1e-9 * lm);
+  EXPECT_GT(std::abs(c.landmark - a.landmark), 1e-3 * a.landmark);
+  const Eigen::VectorXd short_mean = own.head(5);
+  EXPECT_THROW(seif::measureNees(w.ekf, w.true_pose, w.truth, &short_mean), seif::InvalidArgument);
+}
+
 seif::ConsistencyOptions smallStudy(unsigned threads) {
   seif::ConsistencyOptions o;
   o.world = seif::presetConfig(seif::WorldPreset::Paper, 20, 120, 5);
@@ -110,6 +136,43 @@ TEST(Consistency, ResultsDoNotDependOnTheThreadCount) {
   }
 }
 
+// With posterior_mean, a filter whose mean is not its posterior's (the amortised SEIF) gets a
+// second row: the same covariances, the mean H^-1 b. Filters whose mean is the posterior's
+// (EKF; SEIF with mean=exact) get none.
+TEST(Consistency, PosteriorMeanRowsFollowTheFiltersWhoseMeanLagsTheirInformation) {
+  seif::ConsistencyOptions o = smallStudy(2);
+  o.filters.push_back(seif::parseFilterSpec("seif:active=4,mean=exact"));
+  const seif::ConsistencyResult plain = seif::runConsistency(o);
+  o.posterior_mean = true;
+  const seif::ConsistencyResult r = seif::runConsistency(o);
+  ASSERT_EQ(plain.filters.size(), 3u);
+  ASSERT_EQ(r.filters.size(), 4u);
+  const std::vector<std::string> names = {"ekf", "seif:active=4", "seif:active=4 [posterior mean]",
+                                          "seif:active=4,mean=exact"};
+  const std::vector<std::size_t> specs = {0, 1, 1, 2};
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(r.filters[i].name, names[i]);
+    EXPECT_EQ(r.filters[i].spec, specs[i]);
+    EXPECT_EQ(r.filters[i].posterior_mean, i == 2);
+  }
+  // The filters' own rows are unchanged by the extra measurement.
+  for (std::size_t i : {0u, 1u}) EXPECT_EQ(r.filters[i].nees_final.landmark, plain.filters[i].nees_final.landmark);
+  EXPECT_EQ(r.filters[3].nees_final.landmark, plain.filters[2].nees_final.landmark);
+  // The posterior mean is another estimate: its figures differ from the amortised mean's.
+  const seif::ConsistencyFilterResult& own = r.filters[1];
+  const seif::ConsistencyFilterResult& post = r.filters[2];
+  EXPECT_GT(std::abs(post.nees_final.landmark - own.nees_final.landmark), 1e-6 * own.nees_final.landmark);
+  EXPECT_GT(std::abs(post.error_final - own.error_final), 1e-9);
+  EXPECT_EQ(post.nees.size(), own.nees.size());
+  EXPECT_EQ(post.seconds, own.seconds);
+  const auto j = nlohmann::json::parse(seif::consistencyJson(r, o));
+  EXPECT_EQ(j["filters"][1]["estimate"], "own");
+  EXPECT_EQ(j["filters"][2]["estimate"], "posterior_mean");
+  EXPECT_EQ(j["filters"][2]["filter_spec"], j["filters"][1]["filter_spec"]);
+  EXPECT_EQ(j["filters"][3]["filter_spec"], seif::canonicalFilterSpec(o.filters[2]));
+  EXPECT_NE(seif::consistencyTable(r).find("| seif:active=4 [posterior mean] |"), std::string::npos);
+}
+
 TEST(Consistency, BadOptionsAreRejected) {
   seif::ConsistencyOptions o = smallStudy(1);
   o.runs = 0;
@@ -136,6 +199,11 @@ TEST(ConsistencyCli, WritesTheTableJsonAndCsv) {
   const nlohmann::json j = nlohmann::json::parse(seif::test::slurp(dir / "nees.json"));
   EXPECT_EQ(j["band95"]["landmark"].size(), 2u);
   EXPECT_NE(seif::test::slurp(dir / "nees.csv").find("\"ekf\",60,"), std::string::npos);
+  const auto post = seif::test::runCli("consistency --runs 2 --landmarks 15 --steps 60 --samples 3 "
+                                       "--filters ekf,seif:active=3 --posterior-mean --no-figures --out " + dir.string());
+  ASSERT_EQ(post.status, 0) << post.err;
+  EXPECT_NE(post.out.find("| seif:active=3 [posterior mean] |"), std::string::npos) << post.out;
+  EXPECT_EQ(post.out.find("| ekf [posterior mean] |"), std::string::npos) << post.out;
   const auto bad = seif::test::runCli("consistency --filters ekf:relax=3 --out " + dir.string());
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.err.find("ekf:relax=3"), std::string::npos) << bad.err;

@@ -162,6 +162,35 @@ TEST(Seif, AmortizedMeanConvergesToTheExactMean) {
   EXPECT_LT(after, before);
 }
 
+// SlamFilter::posteriorMean: the amortised SEIF's is H^-1 b, computed densely here, and it is
+// not the filter's own (lagging) mean; the query changes nothing. Filters whose mean is the
+// posterior's answer none.
+TEST(Seif, PosteriorMeanSolvesItsInformationAndLeavesTheFilterAsItWas) {
+  const test::Scenario s = test::makeScenario(9, 40, 300);
+  SeifSlam seif(s.start, configFor(s));
+  SeifOptions exact_mean;
+  exact_mean.mean = SeifOptions::Mean::Exact;
+  SeifSlam exact(s.start, configFor(s), exact_mean);
+  EkfSlam ekf(s.start, configFor(s));
+  EifSlam eif(s.start, configFor(s));
+  for (const Step& step : s.steps) {
+    seif.step(step.u, step.observations);
+    exact.step(step.u, step.observations);
+    ekf.step(step.u, step.observations);
+    eif.step(step.u, step.observations);
+  }
+  const Eigen::VectorXd own = seif.mean();
+  const std::optional<Eigen::VectorXd> posterior = seif.posteriorMean();
+  ASSERT_TRUE(posterior.has_value());
+  const Eigen::VectorXd dense = seif.information().ldlt().solve(seif.informationVector());
+  EXPECT_LT(relDiff(*posterior, dense), 1e-9);
+  EXPECT_GT(relDiff(*posterior, own), 1e-6);  // the amortised mean lags it
+  EXPECT_EQ(seif.mean(), own);                // a query, not a step
+  EXPECT_FALSE(exact.posteriorMean().has_value());
+  EXPECT_FALSE(ekf.posteriorMean().has_value());
+  EXPECT_FALSE(eif.posteriorMean().has_value());
+}
+
 TEST(Seif, AccuracyIsCloseToTheEkf) {
   double ekf_sum = 0, seif_sum = 0, exact_sum = 0, after_sum = 0;
   for (std::uint64_t seed = 20; seed < 26; ++seed) {

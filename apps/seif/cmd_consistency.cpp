@@ -28,6 +28,7 @@ struct ConsistencyArgs {
   int jobs = 0;
   std::string out = "out/consistency";
   bool no_figures = false;
+  bool posterior_mean = false;
   std::string dataset;           // real data: an MRCLAM folder
   std::vector<int> robots = {1, 2, 3, 4, 5};
 };
@@ -41,6 +42,7 @@ void consistencyCommand(const ConsistencyArgs& args) {
   options.runs = args.runs;
   options.samples = args.samples;
   options.threads = static_cast<unsigned>(args.jobs);
+  options.posterior_mean = args.posterior_mean;
   for (const std::string& f : splitFilterList(args.filters)) options.filters.push_back(parseFilterSpec(f));
   requireOutputFolder(args.out);
   const std::filesystem::path dir(args.out);
@@ -112,6 +114,10 @@ void addConsistencyCommand(CLI::App& app) {
   cmd->add_option("--jobs", args->jobs, "threads (default: the number of cores)")->transform(integerIn(1, INT_MAX));
   cmd->add_option("--out", args->out, "output folder")->capture_default_str();
   cmd->add_flag("--no-figures", args->no_figures, "write the data but do not render the figures");
+  cmd->add_flag("--posterior-mean", args->posterior_mean,
+                "also measure, for each filter whose mean is not its posterior's (the amortised SEIF), its\n"
+                "covariances with the posterior's mean H^-1 b: a row '<spec> [posterior mean]' after its own\n"
+                "(one sparse solve per sample; the filter is not changed)");
   cmd->add_option("--dataset", args->dataset,
                   "real data instead of the simulator: an MRCLAM folder, one run per robot (--robots),\n"
                   "its ground truth (Vicon poses, surveyed landmarks) the reference")

@@ -398,7 +398,10 @@ void bindConsistency(py::module_& m) {
       .def_readwrite("runs", &ConsistencyOptions::runs)
       .def_readwrite("filters", &ConsistencyOptions::filters, "list of FilterSpec (parse_filter_spec)")
       .def_readwrite("samples", &ConsistencyOptions::samples)
-      .def_readwrite("threads", &ConsistencyOptions::threads, "0: the number of cores");
+      .def_readwrite("threads", &ConsistencyOptions::threads, "0: the number of cores")
+      .def_readwrite("posterior_mean", &ConsistencyOptions::posterior_mean,
+                     "also measure each filter whose mean is not its posterior's (the amortised SEIF) with "
+                     "the posterior's mean H^-1 b: a result of its own after the filter's");
   py::class_<NeesPoint>(m, "NeesPoint")
       .def_readonly("pose", &NeesPoint::pose)
       .def_readonly("landmark", &NeesPoint::landmark)
@@ -407,6 +410,9 @@ void bindConsistency(py::module_& m) {
       .def("__repr__", [](py::handle s) { return reprOf(s, {"pose", "landmark", "pose_relative", "landmark_relative"}); });
   py::class_<ConsistencyFilterResult>(m, "ConsistencyFilterResult")
       .def_readonly("name", &ConsistencyFilterResult::name)
+      .def_readonly("spec", &ConsistencyFilterResult::spec, "its index in ConsistencyOptions.filters")
+      .def_readonly("posterior_mean", &ConsistencyFilterResult::posterior_mean,
+                    "the figures of the posterior's mean H^-1 b, not the filter's own estimate")
       .def_readonly("nees", &ConsistencyFilterResult::nees)
       .def_readonly("nees_final", &ConsistencyFilterResult::nees_final)
       .def_readonly("landmark_nees_runs", &ConsistencyFilterResult::landmark_nees_runs)
@@ -431,7 +437,15 @@ void bindConsistency(py::module_& m) {
       },
       py::arg("options"), py::arg("progress") = py::none(),
       "Runs the NEES study on worker threads; progress(done, total) counts runs.");
-  m.def("measure_nees", &measureNees, py::arg("filter"), py::arg("true_pose"), py::arg("truth"));
+  m.def(
+      "measure_nees",
+      [](const SlamFilter& filter, const Pose2& true_pose, const std::map<int, Vec2>& truth,
+         std::optional<Eigen::VectorXd> mean) {
+        return measureNees(filter, true_pose, truth, mean ? &*mean : nullptr);
+      },
+      py::arg("filter"), py::arg("true_pose"), py::arg("truth"), py::arg("mean") = py::none(),
+      "NEES of the filter now against the truth: its own estimate, or `mean` (the whole state, e.g. "
+      "filter.posterior_mean()) with its covariances");
   m.def("consistency_json", &consistencyJson, py::arg("result"), py::arg("options"));
   m.def("consistency_table", &consistencyTable, py::arg("result"));
 }

@@ -313,6 +313,9 @@ void bindSlamFilter(py::module_& m) {
       .def("rejected_observations", &SlamFilter::rejectedObservations,
            "observations rejected by the gross-outlier gate so far")
       .def("mean", &SlamFilter::mean, "full state mean [x, y, theta, landmarks...] (SEIF: its current estimate)")
+      .def("posterior_mean", &SlamFilter::posteriorMean, py::call_guard<py::gil_scoped_release>(),
+           "the posterior's mean H^-1 b over the whole state, for a filter whose mean() is not it (the "
+           "amortised SEIF: one sparse solve); None for the EKF, EIF, batch and a SEIF with mean='exact'")
       .def("covariance", &SlamFilter::covariance, py::call_guard<py::gil_scoped_release>(),
            "dense full covariance (O(N^3) for information filters)")
       .def("information_dense", &SlamFilter::information, py::call_guard<py::gil_scoped_release>(),

@@ -67,6 +67,10 @@ def test_consistency_runs_on_threads_with_a_progress_callback():
     report = json.loads(seif.consistency_json(result, options))
     assert report["runs"] == 3
     assert "ekf" in seif.consistency_table(result)
+    options.posterior_mean = True
+    result = seif.run_consistency(options)
+    assert [(f.name, f.spec, f.posterior_mean) for f in result.filters] == [
+        ("ekf", 0, False), ("seif", 1, False), ("seif [posterior mean]", 1, True)]
 
 
 def test_bench_case_and_cost_model():

@@ -79,6 +79,12 @@ def test_seif_information_is_sparse_and_equals_dense(paper_world):
         if a < b:
             blocks.add((a, b))
     assert len(blocks) == f.stats().links
+    # The posterior's mean solves H mu = b; the amortised mean() lags it.
+    mu = f.posterior_mean()
+    np.testing.assert_allclose(dense @ mu, f.information_vector(), rtol=0, atol=1e-8 * abs(f.information_vector()).max())
+    assert abs(mu - f.mean()).max() > 1e-9
+    ekf = seif.make_filter("ekf", seif.start_pose(data), paper_config(world))
+    assert ekf.posterior_mean() is None
 
 
 def test_dense_filters_information_sparse_view(paper_world):

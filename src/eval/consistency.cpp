@@ -15,6 +15,7 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -22,6 +23,7 @@ namespace seif {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr NeesPoint kNoNees{kNaN, kNaN, kNaN, kNaN};
 
 /// e^T P^-1 e, NaN when P is not positive definite (a filter that lost its covariance).
 template <int N>
@@ -31,10 +33,17 @@ double nees(const Eigen::Matrix<double, N, 1>& e, const Eigen::Matrix<double, N,
   return e.dot(llt.solve(e));
 }
 
-/// What one filter gave in one run.
-struct FilterRun {
+/// What one estimate of one filter gave in one run.
+struct EstimateRun {
   std::vector<NeesPoint> nees;  // per sample
   double mse = kNaN, mse_aligned = kNaN, rmse = kNaN, rmse_aligned = kNaN;
+};
+
+/// What one filter gave in one run: its own estimate and, when asked for and different, its
+/// posterior's mean (ConsistencyOptions::posterior_mean).
+struct FilterRun {
+  EstimateRun own;
+  std::optional<EstimateRun> posterior;
   double seconds = 0.0;
 };
 
@@ -50,8 +59,8 @@ std::vector<std::size_t> sampleSteps(std::size_t steps, int samples) {
 /// (the last sample) for a smoother, whose estimates before it are only its initial guess.
 class NeesSampler : public RunObserver {
  public:
-  NeesSampler(const Dataset& data, const std::vector<std::size_t>& samples, FilterRun& out)
-      : data_(data), samples_(samples), out_(out) {}
+  NeesSampler(const Dataset& data, const std::vector<std::size_t>& samples, bool posterior, FilterRun& out)
+      : data_(data), samples_(samples), posterior_(posterior), out_(out) {}
   void afterUpdate(const SlamFilter& filter, const Step& step, std::size_t k, double seconds) override {
     out_.seconds += seconds;
     if (next_ >= samples_.size() || samples_[next_] != k + 1) return;
@@ -66,35 +75,52 @@ class NeesSampler : public RunObserver {
 
  private:
   void measure(const SlamFilter& filter, double time) {
-    out_.nees[next_] = measureNees(filter, interpolatePose(data_.groundtruth, time), data_.landmarks);
+    const Pose2 truth = interpolatePose(data_.groundtruth, time);
+    out_.own.nees[next_] = measureNees(filter, truth, data_.landmarks);
+    if (!posterior_) return;
+    if (const std::optional<Eigen::VectorXd> mean = filter.posteriorMean()) {
+      if (!out_.posterior) out_.posterior = EstimateRun{std::vector<NeesPoint>(samples_.size(), kNoNees)};
+      out_.posterior->nees[next_] = measureNees(filter, truth, data_.landmarks, &*mean);
+    }
   }
   const Dataset& data_;
   const std::vector<std::size_t>& samples_;
+  const bool posterior_;
   FilterRun& out_;
   std::size_t next_ = 0;
 };
 
+/// The final landmark errors of `out`'s estimate: the filter's own, or `mean` (state order).
+void measureErrors(const SlamFilter& filter, const std::map<int, Vec2>& truth, const Eigen::VectorXd* mean,
+                   EstimateRun& out) {
+  std::vector<Vec2> est, ref;
+  const std::vector<int>& ids = filter.landmarkIds();
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    if (const auto it = truth.find(ids[k]); it != truth.end()) {
+      est.push_back(mean ? Vec2(mean->segment<2>(3 + 2 * static_cast<Eigen::Index>(k))) : filter.landmark(ids[k]));
+      ref.push_back(it->second);
+    }
+  }
+  if (est.empty()) return;
+  out.rmse = alignedRmse(est, ref, Alignment::None);
+  out.rmse_aligned = alignedRmse(est, ref, Alignment::Rigid);
+  out.mse = out.rmse * out.rmse;
+  out.mse_aligned = out.rmse_aligned * out.rmse_aligned;
+}
+
 FilterRun runOne(const FilterSpec& spec, const Dataset& data, const FilterConfig& config, const Pose2& start,
-                 const std::vector<std::size_t>& samples, std::uint64_t seed) {
+                 const std::vector<std::size_t>& samples, std::uint64_t seed, bool posterior) {
   FilterSpec s = spec;
   s.seif.seed = seed;  // a SEIF's random relaxation varies with the run like the data
   std::unique_ptr<SlamFilter> filter = makeFilter(s, start, config);
   FilterRun out;
-  out.nees.assign(samples.size(), NeesPoint{kNaN, kNaN, kNaN, kNaN});
-  NeesSampler sampler(data, samples, out);
+  out.own.nees.assign(samples.size(), kNoNees);
+  NeesSampler sampler(data, samples, posterior, out);
   runLoop(*filter, data, {&sampler});
-  std::vector<Vec2> est, ref;
-  for (int id : filter->landmarkIds()) {
-    if (const auto it = data.landmarks.find(id); it != data.landmarks.end()) {
-      est.push_back(filter->landmark(id));
-      ref.push_back(it->second);
-    }
-  }
-  if (!est.empty()) {
-    out.rmse = alignedRmse(est, ref, Alignment::None);
-    out.rmse_aligned = alignedRmse(est, ref, Alignment::Rigid);
-    out.mse = out.rmse * out.rmse;
-    out.mse_aligned = out.rmse_aligned * out.rmse_aligned;
+  measureErrors(*filter, data.landmarks, nullptr, out.own);
+  if (out.posterior) {
+    const std::optional<Eigen::VectorXd> mean = filter->posteriorMean();
+    if (mean) measureErrors(*filter, data.landmarks, &*mean, *out.posterior);
   }
   return out;
 }
@@ -125,19 +151,28 @@ NeesPoint meanPoint(const std::vector<NeesPoint>& points) {
 
 }  // namespace
 
-NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const std::map<int, Vec2>& truth) {
-  NeesPoint p{kNaN, kNaN, kNaN, kNaN};
-  const Pose2 x = filter.pose();
+NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const std::map<int, Vec2>& truth,
+                      const Eigen::VectorXd* mean) {
+  NeesPoint p = kNoNees;
+  const std::vector<int>& ids = filter.landmarkIds();
+  if (mean && mean->size() != 3 + 2 * static_cast<Eigen::Index>(ids.size())) {
+    throw InvalidArgument("measureNees: a mean of " + std::to_string(mean->size()) + " values for a state of " +
+                          std::to_string(3 + 2 * ids.size()));
+  }
+  // Landmark k of the state order (= landmarkIds()[k]).
+  auto landmark = [&](std::size_t k) -> Vec2 {
+    return mean ? Vec2(mean->segment<2>(3 + 2 * static_cast<Eigen::Index>(k))) : filter.landmark(ids[k]);
+  };
+  const Pose2 x = mean ? Pose2(mean->head<3>()) : filter.pose();
   Vec3 e = x - true_pose;
   e(2) = wrapAngle(e(2));
   const Mat3 Pxx = filter.poseCovariance();
   p.pose = nees<3>(e, Pxx);
 
-  const std::vector<int>& ids = filter.landmarkIds();
   std::vector<double> global;
-  for (int id : ids) {
-    if (const auto it = truth.find(id); it != truth.end()) {
-      global.push_back(nees<2>(filter.landmark(id) - it->second, filter.landmarkCovariance(id)));
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    if (const auto it = truth.find(ids[k]); it != truth.end()) {
+      global.push_back(nees<2>(landmark(k) - it->second, filter.landmarkCovariance(ids[k])));
     }
   }
   p.landmark = finiteMean(global);
@@ -146,7 +181,7 @@ NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const st
   // every cross-covariance the relative errors need.
   if (ids.size() < 2 || truth.find(ids[0]) == truth.end()) return p;
   const int anchor = ids[0];
-  const Vec2 m0 = filter.landmark(anchor), m0_true = truth.at(anchor);
+  const Vec2 m0 = landmark(0), m0_true = truth.at(anchor);
   const Eigen::Matrix<double, Eigen::Dynamic, 2> c0 = filter.landmarkCovarianceColumns(anchor);
   const Mat2 S00 = c0.middleRows<2>(3);
   // Pose: (p - m0, theta) = A [x; m0] with A = [I2 0 -I2; 0 0 1 0 0].
@@ -169,7 +204,7 @@ NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const st
     const Eigen::Index i = 3 + 2 * static_cast<Eigen::Index>(k);
     const Mat2 Si0 = c0.middleRows<2>(i);
     const Mat2 P = filter.landmarkCovariance(ids[k]) + S00 - Si0 - Si0.transpose();
-    const Vec2 er_i = (filter.landmark(ids[k]) - m0) - (it->second - m0_true);
+    const Vec2 er_i = (landmark(k) - m0) - (it->second - m0_true);
     relative.push_back(nees<2>(er_i, P));
   }
   p.landmark_relative = finiteMean(relative);
@@ -218,7 +253,7 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     steps_of_run[r] = run_data.steps.size();
     for (const FilterSpec& spec : options.filters) {
       try {
-        results[r].push_back(runOne(spec, run_data, config, start, samples, world.seed));
+        results[r].push_back(runOne(spec, run_data, config, start, samples, world.seed, options.posterior_mean));
       } catch (const std::exception& e) {
         throw NumericError("consistency: " +
                            (real ? options.datasets[r].name : "run with seed " + std::to_string(world.seed)) +
@@ -240,30 +275,48 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
   result.sample_steps = sampleSteps(result.steps, options.samples);
   result.pose_band = neesBand95(runs, 3);
   result.landmark_band = neesBand95(runs, 2);
-  for (std::size_t f = 0; f < nf; ++f) {
+  // One row per filter and estimate: its own, then its posterior mean's where measured
+  // (every run of a filter has one or none: it depends on the spec alone).
+  auto summarise = [&](std::size_t f, bool posterior) {
     ConsistencyFilterResult fr;
-    fr.name = options.filters[f].text;
+    fr.name = options.filters[f].text + (posterior ? " [posterior mean]" : "");
+    fr.spec = f;
+    fr.posterior_mean = posterior;
+    auto estimate = [&](std::size_t r) -> const EstimateRun& {
+      return posterior ? *results[r][f].posterior : results[r][f].own;
+    };
     for (std::size_t s = 0; s < result.sample_steps.size(); ++s) {
       std::vector<NeesPoint> at;
-      for (std::size_t r = 0; r < runs; ++r) at.push_back(results[r][f].nees[s]);
+      for (std::size_t r = 0; r < runs; ++r) at.push_back(estimate(r).nees[s]);
       fr.nees.push_back(meanPoint(at));
     }
     fr.nees_final = fr.nees.back();
     std::vector<double> mse, mse_aligned, rmse, rmse_aligned;
     for (std::size_t r = 0; r < runs; ++r) {
-      const FilterRun& run = results[r][f];
+      const EstimateRun& run = estimate(r);
       fr.landmark_nees_runs.push_back(run.nees.back().landmark);
       mse.push_back(run.mse);
       mse_aligned.push_back(run.mse_aligned);
       rmse.push_back(run.rmse);
       rmse_aligned.push_back(run.rmse_aligned);
-      fr.seconds += run.seconds;
+      fr.seconds += results[r][f].seconds;
     }
     fr.mse_final = finiteMean(mse);
     fr.mse_aligned_final = finiteMean(mse_aligned);
     fr.error_final = finiteMean(rmse);
     fr.error_aligned_final = finiteMean(rmse_aligned);
     result.filters.push_back(std::move(fr));
+  };
+  for (std::size_t f = 0; f < nf; ++f) {
+    summarise(f, false);
+    const bool posterior = results[0][f].posterior.has_value();
+    for (std::size_t r = 1; r < runs; ++r) {
+      if (results[r][f].posterior.has_value() != posterior) {
+        throw NumericError("consistency: filter " + options.filters[f].text +
+                           " gave a posterior mean in some runs and not in others");
+      }
+    }
+    if (posterior) summarise(f, true);
   }
   return result;
 }
@@ -284,7 +337,8 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
     }
     filters.push_back({{"name", f.name},
                        // the SEIF's seed is each run's simulator seed
-                       {"filter_spec", i < options.filters.size() ? canonicalFilterSpec(options.filters[i]) : f.name},
+                       {"filter_spec", f.spec < options.filters.size() ? canonicalFilterSpec(options.filters[f.spec]) : f.name},
+                       {"estimate", f.posterior_mean ? "posterior_mean" : "own"},
                        {"pose_nees_final", finiteOrNull(f.nees_final.pose)},
                        {"landmark_nees_final", finiteOrNull(f.nees_final.landmark)},
                        {"pose_nees_relative_final", finiteOrNull(f.nees_final.pose_relative)},
@@ -369,6 +423,10 @@ std::string consistencyTable(const ConsistencyResult& result) {
     << result.runs << " runs: pose [" << cell(result.pose_band.lo, 2) << ", " << cell(result.pose_band.hi, 2)
     << "] (3 dof), landmark [" << cell(result.landmark_band.lo, 2) << ", " << cell(result.landmark_band.hi, 2)
     << "] (2 dof, each landmark's NEES averaged over the map first).\n";
+  if (std::any_of(result.filters.begin(), result.filters.end(), [](const auto& f) { return f.posterior_mean; })) {
+    t << "[posterior mean]: the filter's own covariances with the mean H^-1 b of its information in place of its "
+         "own (amortised) mean.\n";
+  }
   return t.str();
 }
 

@@ -51,5 +51,10 @@ void SeifSlam::relaxMean(int sweeps) {
 
 Eigen::VectorXd SeifSlam::exactMean() const { return factor().solve(informationVector()); }
 
+std::optional<Eigen::VectorXd> SeifSlam::posteriorMean() const {
+  if (options_.mean == SeifOptions::Mean::Exact) return std::nullopt;
+  return exactMean();
+}
+
 void SeifSlam::recoverExactMean() { store_.setMean(exactMean()); }
 }  // namespace seif

@@ -61,6 +61,8 @@ class SeifSlam final : public SlamFilter {
   Eigen::VectorXd mean() const override;
   Eigen::MatrixXd covariance() const override;
   Eigen::MatrixXd information() const override;
+  /// exactMean() with the amortised mean; empty with SeifOptions::mean = Exact.
+  std::optional<Eigen::VectorXd> posteriorMean() const override;
 
 
   const SeifOptions& options() const { return options_; }

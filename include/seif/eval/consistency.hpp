@@ -50,6 +50,12 @@ struct ConsistencyOptions {
   /// always included); each costs every filter its marginals (SEIF: one factorisation).
   int samples = 50;
   unsigned threads = 0;  ///< 0: the number of cores
+  /// Also measure, for every filter whose estimate is not its posterior's mean (the
+  /// amortised SEIF: SlamFilter::posteriorMean), the posterior N(H^-1 b, H^-1): the same
+  /// covariances with the mean H^-1 b, as a row of its own after the filter's
+  /// (ConsistencyFilterResult::posterior_mean). It separates what the filter's information
+  /// claims from how far its constant-time mean lags it. Costs one sparse solve per sample.
+  bool posterior_mean = false;
 };
 
 /// NEES of one filter at one instant: global and relative frame, pose and landmark (the
@@ -63,7 +69,11 @@ struct NeesPoint {
 };
 
 struct ConsistencyFilterResult {
-  std::string name;               ///< the spec as given, e.g. "seif:sparsify=eseif"
+  std::string name;               ///< the spec as given, e.g. "seif:sparsify=eseif"; "... [posterior mean]"
+  std::size_t spec = 0;           ///< its index in ConsistencyOptions::filters
+  /// The figures of the posterior's mean H^-1 b instead of the filter's own estimate
+  /// (ConsistencyOptions::posterior_mean); the covariances are the same.
+  bool posterior_mean = false;
   std::vector<NeesPoint> nees;    ///< mean over runs at each sample step (finite values only)
   NeesPoint nees_final;           ///< mean over runs after the last step
   std::vector<double> landmark_nees_runs;  ///< final landmark NEES of each run
@@ -89,11 +99,14 @@ struct ConsistencyResult {
 ConsistencyResult runConsistency(const ConsistencyOptions& options,
                                  const std::function<void(std::size_t, std::size_t)>& progress = {});
 
-/// The NEES of `filter` now against the true pose and landmark positions (by id).
-NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const std::map<int, Vec2>& truth);
+/// The NEES of `filter` now against the true pose and landmark positions (by id), with its
+/// marginal covariances and its own estimate, or `mean` (the whole state in the state
+/// order, e.g. SlamFilter::posteriorMean) when given.
+NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const std::map<int, Vec2>& truth,
+                      const Eigen::VectorXd* mean = nullptr);
 
 /// nees.json: {"runs", "steps", "band95": {"pose": [lo, hi], "landmark": [lo, hi]},
-/// "sample_steps", "filters": [{"name", "pose_nees_final", "landmark_nees_final",
+/// "sample_steps", "filters": [{"name", "filter_spec", "estimate" ("own" | "posterior_mean"), "pose_nees_final", "landmark_nees_final",
 /// "pose_nees_relative_final", "landmark_nees_relative_final", "error_final",
 /// "error_aligned_final", "mse_final", "mse_aligned_final", "seconds", "nees": {"pose":
 /// [...], "landmark": [...], "pose_relative": [...], "landmark_relative": [...]}}]}.

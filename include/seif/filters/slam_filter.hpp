@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -245,6 +246,15 @@ class SlamFilter {
   virtual Eigen::VectorXd mean() const = 0;
   virtual Eigen::MatrixXd covariance() const = 0;
   virtual Eigen::MatrixXd information() const = 0;
+
+  /// The posterior's mean over the whole state (state order), for a filter whose own
+  /// estimate (pose(), landmark(), mean()) is not it: the amortised SEIF, whose mean is
+  /// relaxed a few landmarks per step and lags its information after a loop closure, gives
+  /// H^-1 b, one solve with its cached sparse factor (the factorisation exact marginals
+  /// share, O(N) at the paper's sparsity). Empty for the EKF, the EIF, the batch MAP and a
+  /// SEIF with SeifOptions::mean = Exact, whose estimate is the posterior's mean. The filter
+  /// is not changed: its steps keep linearising at its own mean.
+  virtual std::optional<Eigen::VectorXd> posteriorMean() const { return std::nullopt; }
 
   /// The pose the convenience predict() linearises at (the filter's own, unwrapped).
   virtual Pose2 linearizationPose() const { return pose(); }
