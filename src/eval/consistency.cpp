@@ -8,6 +8,7 @@
 #include <seif/io/event_source.hpp>
 #include <seif/io/mrclam.hpp>
 
+#include "filters/landmark_book.hpp"
 #include "json_fields.hpp"
 
 #include <Eigen/Cholesky>
@@ -24,6 +25,12 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr NeesPoint kNoNees{kNaN, kNaN, kNaN, kNaN};
+
+/// Landmark `k` of the state order (landmarkIds()[k]): the filter's own, or `mean`'s.
+Vec2 landmarkEstimate(const SlamFilter& filter, const Eigen::VectorXd* mean, std::size_t k) {
+  const int slot = static_cast<int>(k);
+  return mean ? Vec2(mean->segment<2>(StateLayout::landmark(slot))) : filter.landmark(filter.landmarkIds()[k]);
+}
 
 /// e^T P^-1 e, NaN when P is not positive definite (a filter that lost its covariance).
 template <int N>
@@ -97,7 +104,7 @@ void measureErrors(const SlamFilter& filter, const std::map<int, Vec2>& truth, c
   const std::vector<int>& ids = filter.landmarkIds();
   for (std::size_t k = 0; k < ids.size(); ++k) {
     if (const auto it = truth.find(ids[k]); it != truth.end()) {
-      est.push_back(mean ? Vec2(mean->segment<2>(3 + 2 * static_cast<Eigen::Index>(k))) : filter.landmark(ids[k]));
+      est.push_back(landmarkEstimate(filter, mean, k));
       ref.push_back(it->second);
     }
   }
@@ -155,14 +162,12 @@ NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const st
                       const Eigen::VectorXd* mean) {
   NeesPoint p = kNoNees;
   const std::vector<int>& ids = filter.landmarkIds();
-  if (mean && mean->size() != 3 + 2 * static_cast<Eigen::Index>(ids.size())) {
+  const Eigen::Index state = StateLayout::size(static_cast<int>(ids.size()));
+  if (mean && mean->size() != state) {
     throw InvalidArgument("measureNees: a mean of " + std::to_string(mean->size()) + " values for a state of " +
-                          std::to_string(3 + 2 * ids.size()));
+                          std::to_string(state));
   }
-  // Landmark k of the state order (= landmarkIds()[k]).
-  auto landmark = [&](std::size_t k) -> Vec2 {
-    return mean ? Vec2(mean->segment<2>(3 + 2 * static_cast<Eigen::Index>(k))) : filter.landmark(ids[k]);
-  };
+  auto landmark = [&](std::size_t k) { return landmarkEstimate(filter, mean, k); };
   const Pose2 x = mean ? Pose2(mean->head<3>()) : filter.pose();
   Vec3 e = x - true_pose;
   e(2) = wrapAngle(e(2));
