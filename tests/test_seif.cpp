@@ -330,7 +330,7 @@ TEST(Seif, AStepThatFailsNumericallyLeavesTheFilterAsItWas) {
   // observation whose noise is negative definite (it passes the input checks - finite -
   // and adds negative information after the batch's first observations have entered).
   for (const char* spec : {"seif", "seif:sparsify=eseif,beta=2", "seif:relax-order=random,linearization=invariant,iterations=2",
-                           "seif:mean=exact"}) {
+                           "seif:mean=exact", "seif:motion=deferred", "seif:profile=consistent,motion=deferred"}) {
     const test::Scenario s = test::makeScenario(3, 40, 40);
     const FilterConfig config = configFor(s);
     auto seif = makeFilter(spec, s.start, config), twin = makeFilter(spec, s.start, config);

@@ -153,6 +153,15 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateInvariantIteratedSteps) {
   EXPECT_GT(expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700), 100u);
 }
 
+TEST(SeifAllocation, NoHeapAllocationInSteadyStateDeferredMotionSteps) {
+  // The held increment is a value in the filter: composing and flushing allocate nothing.
+  seif::SeifOptions options;
+  options.motion = seif::SeifOptions::Motion::Deferred;
+  expectNoHeapAllocationInSteadyStateSteps(options);
+  options.active = 12;
+  expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
+}
+
 TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsWithCovarianceBounds) {
   // The bounds' joint prior, tightening and re-anchoring run on fixed-capacity buffers.
   seif::SeifOptions options;

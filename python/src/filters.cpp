@@ -55,6 +55,10 @@ void bindSeifOptions(py::module_& m) {
       .value("Exact", SeifOptions::Covariance::Exact)
       .value("Local", SeifOptions::Covariance::Local)
       .value("Conservative", SeifOptions::Covariance::Conservative);
+  bindNamedEnum<SeifOptions::Motion>(o, "Motion", "'immediate' | 'deferred'", &SeifOptions::parseMotion,
+                                     &nameOf<SeifOptions::Motion>)
+      .value("Immediate", SeifOptions::Motion::Immediate)
+      .value("Deferred", SeifOptions::Motion::Deferred);
   o.def(py::init<>())
       .def_readwrite("active", &SeifOptions::active, "theta_x: landmarks linked to the robot after each step")
       .def_readwrite("relax", &SeifOptions::relax, "K: landmarks relaxed per step besides the robot and the active ones")
@@ -62,6 +66,7 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("deactivate", &SeifOptions::deactivate, "weakest (the paper) or oldest")
       .def_readwrite("recovery", &SeifOptions::recovery, "when the amortised mean is relaxed in update()")
       .def_readwrite("relax_order", &SeifOptions::relax_order, "which K landmarks each step relaxes")
+      .def_readwrite("motion", &SeifOptions::motion, "immediate (every control) or deferred (composed until an observation)")
       .def_readwrite("seed", &SeifOptions::seed, "seed of the random choice of relaxed landmarks")
       .def_readwrite("sparsify", &SeifOptions::sparsify, "seif (the paper's conditioning) or eseif")
       .def_readwrite("covariance", &SeifOptions::covariance, "exact, local or conservative marginal covariances")
@@ -75,7 +80,7 @@ void bindSeifOptions(py::module_& m) {
                      "keep an upper bound on every landmark's covariance (MarginalMode.Conservative)")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta", "reanchor", "blanket", "bounds"});
+                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion"});
       });
 }
 

@@ -22,8 +22,8 @@
 namespace seif {
 
 inline constexpr std::string_view kArchiveMagic = "SEIFCKPT";
-inline constexpr std::uint32_t kArchiveVersion = 4;  // 2: the config no longer holds noise sigmas; 3: seif blanket;
-                                                     // 4: seif covariance bounds
+inline constexpr std::uint32_t kArchiveVersion = 5;  // 2: the config no longer holds noise sigmas; 3: seif blanket;
+                                                     // 4: seif covariance bounds; 5: seif deferred motion
 inline constexpr std::size_t kArchiveHeaderSize = 32;
 
 /// FNV-1a 64 of `bytes` (the payload checksum).

@@ -78,6 +78,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.f64(o.reanchor);
   out.i64(o.blanket);
   out.u64(o.bounds ? 1 : 0);
+  out.u64(static_cast<std::uint64_t>(o.motion));
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -101,6 +102,7 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   // Version 2 had no bound: its local marginals used the whole Markov blanket.
   o.blanket = in.version() >= 3 ? static_cast<int>(in.i64In("blanket", 0, kIntMax)) : 0;
   o.bounds = in.version() >= 4 && in.u64Max("bounds", 1) == 1;  // earlier files kept none
+  if (in.version() >= 5) o.motion = static_cast<SeifOptions::Motion>(in.u64Max("motion", 1));
   return o;
 }
 

@@ -38,7 +38,7 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 // here is the one line a flag or a spec error shows.
 void applyProfile(FilterSpec& s, std::string_view v);
 
-const std::array<FilterOption, 18> kOptions = {{
+const std::array<FilterOption, 19> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
      "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=30 "
      "(honest covariances in constant time; README)",
@@ -109,6 +109,11 @@ const std::array<FilterOption, 18> kOptions = {{
      "linearization=invariant: re-anchor an observed landmark whose mean moved more than this [m]",
      [](FilterSpec& s, std::string_view v) { s.seif.reanchor = parseLength("reanchor", v); },
      [](const FilterSpec& s) { return formatReal(s.seif.reanchor); }},
+    {"motion", kSeif, kChoice, "immediate|deferred", 0, 0,
+     "when motion enters H: at every control (immediate, the paper) or composed into one "
+     "increment at the next observation (deferred: one motion update per scan)",
+     [](FilterSpec& s, std::string_view v) { s.seif.motion = SeifOptions::parseMotion(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.seif.motion)); }},
     {"seed", kSeif, Opt::Kind::Seed, "", 0, 0, "seed of the random choice of relaxed landmarks",
      [](FilterSpec& s, std::string_view v) { s.seif.seed = parseSeed(v); },
      [](const FilterSpec& s) { return std::to_string(s.seif.seed); }},

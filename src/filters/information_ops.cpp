@@ -13,6 +13,15 @@
 
 namespace seif {
 
+Mat3 invertibleMotionJacobian(const Mat3& J_delta_x) {
+  const Mat3 G = Mat3::Identity() + J_delta_x;
+  const double det = G.determinant();
+  if (!(std::abs(det) > 1e-12)) {
+    throw NumericError("motion update: the motion Jacobian I + dDelta/dx is singular (det " + std::to_string(det) + ")");
+  }
+  return G;
+}
+
 void informationMotionUpdate(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
                              Eigen::Ref<Eigen::VectorXd> mu, const Vec3& delta,
                              const Mat3& J_delta_x, const Mat3& U,
@@ -28,11 +37,7 @@ void informationMotionUpdate(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Ve
   // G_x = I + dDelta/dx, any 3x3 motion Jacobian (algorithm.md §1). Its inverse by
   // cofactors: for the planar models' heading-only Jacobians this is I - dDelta/dx to the
   // last bit (unit determinant, products with 0 and 1 exact).
-  const Mat3 G = Mat3::Identity() + J_delta_x;
-  const double det = G.determinant();
-  if (!(std::abs(det) > 1e-12)) {
-    throw NumericError("motion update: the motion Jacobian I + dDelta/dx is singular (det " + std::to_string(det) + ")");
-  }
+  const Mat3 G = invertibleMotionJacobian(J_delta_x);
   const Mat3 G_inv = G.inverse();
   // Phi = G^-T H G^-1: G^-1 differs from I only in the robot block.
   for (Eigen::Index j = 0; j < n; ++j) {

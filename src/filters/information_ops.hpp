@@ -14,6 +14,10 @@
 
 namespace seif {
 
+/// G = I + J_delta_x, throwing NumericError when it is singular (det within 1e-12 of 0): the
+/// motion update inverts it. Deferred motion checks each increment with it as it comes.
+Mat3 invertibleMotionJacobian(const Mat3& J_delta_x);
+
 /// Motion update in information form, paper Lemma 3 / algorithm.md §1, on a dense
 /// symmetric matrix whose first three rows and columns are the robot pose:
 ///   Phi = G^-T H G^-1,  kappa = Phi S_x (U^-1 + S_x^T Phi S_x)^-1 S_x^T Phi,

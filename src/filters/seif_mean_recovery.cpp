@@ -8,7 +8,7 @@
 
 namespace seif {
 
-void SeifSlam::recoverMean() {
+void SeifSlam::recoverMean(bool with_active) {
   // §2: one block Gauss-Seidel pass over the active landmarks, the robot and K others.
   // In a map much larger than the caches, relaxing a random landmark costs three dependent
   // cache misses (SeifStore::relaxLandmarks). The K landmarks are therefore drawn first (the
@@ -33,7 +33,7 @@ void SeifSlam::recoverMean() {
   };
   int chunk = std::min(random, kChunk);
   draw(chunk);
-  store_.relaxActive();
+  if (with_active) store_.relaxActive();
   for (int done = 0; done < random;) {
     store_.relaxLandmarks(std::span<const int>(picks.data(), static_cast<std::size_t>(chunk)));
     done += chunk;
@@ -43,6 +43,7 @@ void SeifSlam::recoverMean() {
 }
 
 void SeifSlam::relaxMean(int sweeps) {
+  settleMotion();
   for (int s = 0; s < sweeps; ++s) {
     store_.relaxRobot();
     for (int i = 0; i < store_.size(); ++i) store_.relaxLandmark(i);

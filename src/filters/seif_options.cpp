@@ -36,6 +36,7 @@ constexpr Names<SeifOptions::Recovery, 2> kRecovery{"recovery point", {"after-up
 constexpr Names<SeifOptions::RelaxOrder, 2> kRelaxOrder{"relaxation order", {"random", "cyclic"}};
 constexpr Names<SeifOptions::Sparsify, 2> kSparsify{"sparsification", {"seif", "eseif"}};
 constexpr Names<SeifOptions::Covariance, 3> kCovariance{"covariance recovery", {"exact", "local", "conservative"}};
+constexpr Names<SeifOptions::Motion, 2> kMotion{"motion timing", {"immediate", "deferred"}};
 constexpr Names<BatchOptions::Init, 3> kBatchInit{"batch start", {"ekf", "seif", "odometry"}};
 constexpr Names<BatchOptions::Solver, 2> kBatchSolver{"batch solver", {"cholesky", "kkt"}};
 
@@ -47,6 +48,7 @@ SeifOptions::Recovery SeifOptions::parseRecovery(std::string_view s) { return kR
 SeifOptions::RelaxOrder SeifOptions::parseRelaxOrder(std::string_view s) { return kRelaxOrder.parse(s); }
 SeifOptions::Sparsify SeifOptions::parseSparsify(std::string_view s) { return kSparsify.parse(s); }
 SeifOptions::Covariance SeifOptions::parseCovariance(std::string_view s) { return kCovariance.parse(s); }
+SeifOptions::Motion SeifOptions::parseMotion(std::string_view s) { return kMotion.parse(s); }
 
 std::string_view optionName(SeifOptions::Mean v) { return kMean.name(v); }
 std::string_view optionName(SeifOptions::Deactivate v) { return kDeactivate.name(v); }
@@ -54,6 +56,7 @@ std::string_view optionName(SeifOptions::Recovery v) { return kRecovery.name(v);
 std::string_view optionName(SeifOptions::RelaxOrder v) { return kRelaxOrder.name(v); }
 std::string_view optionName(SeifOptions::Sparsify v) { return kSparsify.name(v); }
 std::string_view optionName(SeifOptions::Covariance v) { return kCovariance.name(v); }
+std::string_view optionName(SeifOptions::Motion v) { return kMotion.name(v); }
 
 BatchOptions::Init BatchOptions::parseInit(std::string_view s) { return kBatchInit.parse(s); }
 BatchOptions::Solver BatchOptions::parseSolver(std::string_view s) { return kBatchSolver.parse(s); }

@@ -62,6 +62,7 @@ void SeifSlam::guarded(const Step& step) {
                     fallbacks = eseif_fallbacks_;
   std::optional<std::mt19937_64> rng;
   if (options_.relax_order == SeifOptions::RelaxOrder::Random) rng = rng_;
+  const std::optional<MotionIncrement> pending = pending_motion_;
   store_.beginTransaction();
   try {
     step();
@@ -75,6 +76,7 @@ void SeifSlam::guarded(const Step& step) {
     eseif_deferrals_ = deferrals;
     eseif_fallbacks_ = fallbacks;
     if (rng) rng_ = *rng;
+    pending_motion_ = pending;
     invalidateFactor();
     throw;
   }
@@ -82,9 +84,18 @@ void SeifSlam::guarded(const Step& step) {
 }
 
 void SeifSlam::motionUpdate(const MotionIncrement& increment) {
-  const MotionIncrement m = book_.motionIncrement(increment, store_.robotMean().head<2>());
+  const MotionIncrement m = book_.motionIncrement(increment, robotMean().head<2>());
   store_.beginStep();
   last_sparsification_residual_ = 0.0;
+  if (options_.motion == SeifOptions::Motion::Deferred) {
+    (void)invertibleMotionJacobian(m.J_delta_x);  // refused now, not at the next observation
+    pending_motion_ = pending_motion_ ? compose(*pending_motion_, m) : m;
+    return;
+  }
+  applyMotion(m);
+}
+
+void SeifSlam::applyMotion(const MotionIncrement& m) {
   // §1: Lemma 3 on the {robot, active} block, the only part of H that motion changes.
   store_.gatherActive();
   workspace_.resize(6, store_.localH().cols());
@@ -93,6 +104,25 @@ void SeifSlam::motionUpdate(const MotionIncrement& increment) {
   store_.scatter();
   store_.moveRobotAnchor(m.delta.head<2>());  // T(a + d) T(a)^-1 is the standard G (invariant.hpp)
   invalidateFactor();
+}
+
+void SeifSlam::flushMotion() {
+  if (!pending_motion_) return;
+  const MotionIncrement m = *pending_motion_;
+  pending_motion_.reset();
+  applyMotion(m);
+}
+
+void SeifSlam::settleMotion() const {
+  if (!pending_motion_) return;
+  // The one place a query changes the representation (not the posterior): the object is
+  // never const itself (makeFilter, load), and a failure leaves it as it was (guarded).
+  auto& self = const_cast<SeifSlam&>(*this);
+  self.guarded([&] { self.flushMotion(); });
+}
+
+Vec3 SeifSlam::robotMean() const {
+  return pending_motion_ ? Vec3(store_.robotMean() + pending_motion_->delta) : store_.robotMean();
 }
 
 void SeifSlam::measurementUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
@@ -203,6 +233,18 @@ void SeifSlam::update(std::span<const Observation> observations, const Measureme
 void SeifSlam::applyUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
   const bool amortized = options_.mean == SeifOptions::Mean::Amortized;
   const bool book_order = options_.recovery == SeifOptions::Recovery::BeforeMeasurement;
+  if (options_.motion == SeifOptions::Motion::Deferred) {
+    if (observations.empty()) {
+      // Nothing observed: the robot's motion stays held; the map's mean keeps relaxing in
+      // the system before it, which has the same landmark posterior. Invariant: the robot is
+      // re-anchored where immediate motion re-anchors it (every update), at its mean before
+      // the held controls, so their noise enters at a fresh anchor (a no-op after the first).
+      if (config_.linearization == Linearization::Invariant) store_.reanchorRobot();
+      if (amortized) recoverMean(false);
+      return;
+    }
+    flushMotion();
+  }
   if (amortized && book_order) recoverMean();
   if (config_.linearization == Linearization::Invariant) reanchor(observations);
   if (options_.sparsify == SeifOptions::Sparsify::Eseif) {
@@ -255,6 +297,7 @@ void SeifSlam::reanchorLandmark(int slot, const Vec2& to) {
 
 void SeifSlam::removeLandmark(int id) {
   const int slot = book_.require(id);
+  settleMotion();
   // An active landmark is deactivated first: marginalised while linked to the robot, it
   // would link the robot to all its neighbours (more than a local block holds, on a dense map).
   if (store_.node(slot).active >= 0) deactivateSurplus(false, slot);
@@ -267,6 +310,7 @@ void SeifSlam::removeLandmark(int id) {
 void SeifSlam::mergeLandmarks(int keep, int drop) {
   const int k = book_.require(keep), d = book_.require(drop);
   if (k == d) throw InvalidArgument("seif: cannot merge landmark " + std::to_string(keep) + " with itself");
+  settleMotion();
   if (config_.linearization == Linearization::Invariant) {
     // One variable, one anchor: one of the two is re-anchored to the other's, which links
     // its neighbours to the robot. When neither fits in a local block even after a
@@ -303,9 +347,10 @@ void SeifSlam::mergeLandmarks(int keep, int drop) {
 
 // ---------------------------------------------------------------- reading out ---------
 
-Eigen::VectorXd SeifSlam::mean() const { return store_.mean(); }
+Eigen::VectorXd SeifSlam::mean() const { return store().mean(); }
 
 const SparseMarginals& SeifSlam::factor() const {
+  settleMotion();
   if (!factor_) {
     try {
       factor_ = std::make_unique<SparseMarginals>(store_.lowerInformation());
@@ -326,7 +371,7 @@ Eigen::MatrixXd SeifSlam::covariance() const {
   return llt.solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
 }
 
-Pose2 SeifSlam::pose() const { return wrapHeading(Pose2(store_.robotMean())); }
+Pose2 SeifSlam::pose() const { return wrapHeading(Pose2(robotMean())); }
 
 Vec2 SeifSlam::landmark(int id) const { return store_.node(book_.require(id)).mu; }
 
@@ -350,6 +395,7 @@ Eigen::MatrixXd SeifSlam::localCovariance(std::initializer_list<int> vars, bool 
 }
 
 Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars, bool conservative) const {
+  settleMotion();
   // The blanket from the store's links: the robot's are the active landmarks; a landmark's
   // are its linked landmarks, and the robot when it is active. Bounded by options_.blanket.
   const Vec3 dx = store_.robotInformation().diagonal();
@@ -389,6 +435,7 @@ Marginal SeifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalM
   std::vector<int> vars;
   if (pose) vars.push_back(-1);
   for (int id : landmarks) vars.push_back(book_.require(id));
+  settleMotion();
   Marginal m;
   m.mean.resize(static_cast<Eigen::Index>(pose ? 3 + 2 * landmarks.size() : 2 * landmarks.size()));
   Eigen::Index r = 0;
@@ -444,6 +491,7 @@ void SeifSlam::requireBounds() const {
 
 void SeifSlam::refreshCovarianceBounds() {
   requireBounds();
+  settleMotion();
   const SparseMarginals& f = factor();
   for (int s = 0; s < store_.size(); ++s) store_.setBound(s, f.covarianceBlock<2>(StateLayout::landmark(s)));
 }

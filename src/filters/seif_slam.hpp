@@ -66,12 +66,16 @@ class SeifSlam final : public SlamFilter {
 
 
   const SeifOptions& options() const { return options_; }
-  const SeifStore& store() const { return store_; }
+  /// The store, with any deferred motion applied first (SeifOptions::motion).
+  const SeifStore& store() const {
+    settleMotion();
+    return store_;
+  }
   /// H as a sparse matrix and b, in the state order [x, y, th, landmarks...].
-  Eigen::SparseMatrix<double> sparseInformation() const { return store_.sparseInformation(); }
+  Eigen::SparseMatrix<double> sparseInformation() const { return store().sparseInformation(); }
   /// Its lower triangle, what the factorisation reads (SeifStore::lowerInformation).
-  Eigen::SparseMatrix<double> lowerInformation() const { return store_.lowerInformation(); }
-  Eigen::VectorXd informationVector() const { return store_.informationVector(); }
+  Eigen::SparseMatrix<double> lowerInformation() const { return store().lowerInformation(); }
+  Eigen::VectorXd informationVector() const { return store().informationVector(); }
   /// The exact mean H^-1 b (sparse Cholesky), without changing the filter.
   Eigen::VectorXd exactMean() const;
   /// Runs `sweeps` full Gauss-Seidel sweeps of the mean over every variable.
@@ -102,7 +106,7 @@ class SeifSlam final : public SlamFilter {
   std::size_t eseifFallbacks() const { return eseif_fallbacks_; }
 
  protected:
-  Pose2 linearizationPose() const override { return store_.robotMean(); }
+  Pose2 linearizationPose() const override { return robotMean(); }
 
  private:
   friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
@@ -113,8 +117,19 @@ class SeifSlam final : public SlamFilter {
   // the sparsification first re-solving the robot-active block's mean on the block it gathers
   // (Recovery::AfterMeasurement: recoverMean() after measurementUpdate(), no re-solve; exact
   // mean: measurementUpdate(z); recoverExactMean(); sparsify()).
-  void motionUpdate(const MotionIncrement& increment);      ///< §1, Lemma 3
-  void recoverMean();                                      ///< §2, amortised, eq. (42)
+  void motionUpdate(const MotionIncrement& increment);      ///< §1, Lemma 3 (or deferred)
+  /// Lemma 3 on the robot-active block with one (possibly composed) increment.
+  void applyMotion(const MotionIncrement& m);
+  /// Motion::Deferred: applies the increment held since the last observation, if any.
+  void flushMotion();
+  /// flushMotion() all or nothing, for the queries that read H or the robot's information:
+  /// the posterior is the same, only its representation changes (hence const).
+  void settleMotion() const;
+  /// The robot's mean with any deferred motion: the store's plus the held increment.
+  Vec3 robotMean() const;
+  /// §2, amortised, eq. (42); without `with_active` only the K landmarks (an update without
+  /// observations while motion is deferred: the robot-active block is solved at the next).
+  void recoverMean(bool with_active = true);
   void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
   void measurementUpdate(std::span<const Observation> z,
                          const MeasurementModel& sensor);  ///< §3, eq. (21-22)
@@ -168,6 +183,8 @@ class SeifSlam final : public SlamFilter {
   std::size_t eseif_relocalizations_ = 0;
   std::size_t eseif_deferrals_ = 0;
   std::size_t eseif_fallbacks_ = 0;
+  /// Motion::Deferred: the increments since the last motion update, composed (compose()).
+  std::optional<MotionIncrement> pending_motion_;
 
   // Work buffers, reused every step (no allocation in the steady state).
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxLocalDim> workspace_;

@@ -150,6 +150,12 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
   out.u64(f.eseif_relocalizations_);
   out.u64(f.eseif_deferrals_);
   out.u64(f.eseif_fallbacks_);
+  out.u64(f.pending_motion_ ? 1 : 0);  // SeifOptions::Motion::Deferred: the increment held
+  if (f.pending_motion_) {
+    out.fixed(f.pending_motion_->delta);
+    out.fixed(f.pending_motion_->J_delta_x);
+    out.fixed(f.pending_motion_->U);
+  }
 }
 
 void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
@@ -170,6 +176,14 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
   f.eseif_relocalizations_ = static_cast<std::size_t>(in.u64("eseif relocalizations"));
   f.eseif_deferrals_ = static_cast<std::size_t>(in.u64("eseif deferrals"));
   f.eseif_fallbacks_ = static_cast<std::size_t>(in.u64("eseif fallbacks"));
+  f.pending_motion_.reset();
+  if (in.version() >= 5 && in.u64Max("deferred motion", 1) == 1) {
+    MotionIncrement m;
+    in.fixed("deferred motion increment", m.delta, true);
+    in.fixed("deferred motion Jacobian", m.J_delta_x, true);
+    in.fixed("deferred motion noise", m.U, true);
+    f.pending_motion_ = m;
+  }
   f.invalidateFactor();
 }
 

@@ -32,6 +32,15 @@ void requireDt(double dt) {
 
 }  // namespace
 
+MotionIncrement compose(const MotionIncrement& first, const MotionIncrement& second) {
+  const Mat3 G2 = Mat3::Identity() + second.J_delta_x;
+  MotionIncrement c;
+  c.delta = first.delta + second.delta;
+  c.J_delta_x = G2 * (Mat3::Identity() + first.J_delta_x) - Mat3::Identity();
+  c.U = G2 * first.U * G2.transpose() + second.U;
+  return c;
+}
+
 Pose2 MotionModel::apply(const Pose2& x, const MotionInput& u) const {
   Pose2 next = x + linearize(x, u).delta;
   next.z() = wrapAngle(next.z());
