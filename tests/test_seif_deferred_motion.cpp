@@ -168,7 +168,11 @@ TEST(DeferredMotion, AnUpdateWithoutObservationsLeavesTheRobotsInformationAlone)
   for (std::size_t k = 30; k < 35; ++k) {
     seif.predict(s.steps[k].u);
     seif.update(none);
-    EXPECT_LT(seif.stats().blocks_touched, 200u) << "an empty update relaxes K landmarks only";
+    // The first solves the robot-active block (the last correction), later ones relax the
+    // robot and K landmarks only.
+    if (k > 30) {
+      EXPECT_LT(seif.stats().blocks_touched, 200u) << "step " << k;
+    }
   }
   EXPECT_GT((seif.pose() - before).norm(), 1e-3) << "the pose moves with the held controls";
   EXPECT_NE(seif.store().robotInformation(), H_xx) << "read through store(), the motion has entered";

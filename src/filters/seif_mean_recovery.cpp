@@ -33,7 +33,11 @@ void SeifSlam::recoverMean(bool with_active) {
   };
   int chunk = std::min(random, kChunk);
   draw(chunk);
-  if (with_active) store_.relaxActive();
+  if (with_active) {
+    store_.relaxActive();
+  } else {
+    store_.relaxRobot();
+  }
   for (int done = 0; done < random;) {
     store_.relaxLandmarks(std::span<const int>(picks.data(), static_cast<std::size_t>(chunk)));
     done += chunk;

@@ -127,8 +127,8 @@ class SeifSlam final : public SlamFilter {
   void settleMotion() const;
   /// The robot's mean with any deferred motion: the store's plus the held increment.
   Vec3 robotMean() const;
-  /// §2, amortised, eq. (42); without `with_active` only the K landmarks (an update without
-  /// observations while motion is deferred: the robot-active block is solved at the next).
+  /// §2, amortised, eq. (42); without `with_active` the robot alone and the K landmarks
+  /// (updates without observations while motion is deferred, after the first).
   void recoverMean(bool with_active = true);
   void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
   void measurementUpdate(std::span<const Observation> z,
@@ -183,8 +183,10 @@ class SeifSlam final : public SlamFilter {
   std::size_t eseif_relocalizations_ = 0;
   std::size_t eseif_deferrals_ = 0;
   std::size_t eseif_fallbacks_ = 0;
-  /// Motion::Deferred: the increments since the last motion update, composed (compose()).
+  /// Motion::Deferred: the increments since the last motion update, composed (compose()),
+  /// and how many controls they hold.
   std::optional<MotionIncrement> pending_motion_;
+  std::size_t pending_controls_ = 0;
 
   // Work buffers, reused every step (no allocation in the steady state).
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxLocalDim> workspace_;

@@ -155,6 +155,7 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
     out.fixed(f.pending_motion_->delta);
     out.fixed(f.pending_motion_->J_delta_x);
     out.fixed(f.pending_motion_->U);
+    out.u64(f.pending_controls_);
   }
 }
 
@@ -177,11 +178,14 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
   f.eseif_deferrals_ = static_cast<std::size_t>(in.u64("eseif deferrals"));
   f.eseif_fallbacks_ = static_cast<std::size_t>(in.u64("eseif fallbacks"));
   f.pending_motion_.reset();
+  f.pending_controls_ = 0;
   if (in.version() >= 5 && in.u64Max("deferred motion", 1) == 1) {
     MotionIncrement m;
     in.fixed("deferred motion increment", m.delta, true);
     in.fixed("deferred motion Jacobian", m.J_delta_x, true);
     in.fixed("deferred motion noise", m.U, true);
+    f.pending_controls_ = static_cast<std::size_t>(in.u64("deferred controls"));
+    if (f.pending_controls_ == 0) in.fail("a deferred motion of no controls");
     f.pending_motion_ = m;
   }
   f.invalidateFactor();
