@@ -39,6 +39,34 @@ def test_resumed_filter_is_bit_identical(paper_world, spec, how, tmp_path):
     assert f.stats().as_dict() == straight.stats().as_dict()
 
 
+def test_deferred_motion_pickles_with_its_held_controls(paper_world):
+    """seif:motion=deferred holds the controls between observations: pickled while it holds
+    some (the sensor sees one step in three), the filter continues bit-identically, and its
+    pose meanwhile is the held motion's."""
+    data, world = paper_world
+    start, config = seif.start_pose(data), paper_config(world)
+    steps = [(step.u, step.observations if k % 3 == 0 else []) for k, step in enumerate(data.steps)]
+    options = seif.SeifOptions()
+    options.motion = "deferred"
+    assert options.motion == seif.SeifOptions.Motion.Deferred
+    straight = seif.make_filter("seif:profile=consistent", start, config)
+    assert straight.options.motion.text == "deferred"
+    for u, z in steps:
+        straight.step(u, z)
+    f = seif.make_filter("seif:profile=consistent", start, config)
+    immediate = seif.make_filter("seif:profile=consistent,motion=immediate,mean=exact", start, config)
+    exact = seif.make_filter("seif:profile=consistent,mean=exact", start, config)
+    for k, (u, z) in enumerate(steps):
+        f.step(u, z)
+        immediate.step(u, z)
+        exact.step(u, z)
+        if k in (100, 251):  # two controls held
+            f = pickle.loads(pickle.dumps(f))
+            np.testing.assert_allclose(exact.pose(), immediate.pose(), atol=1e-2)
+    np.testing.assert_array_equal(f.mean(), straight.mean())
+    np.testing.assert_array_equal(f.pose_covariance(), straight.pose_covariance())
+
+
 def test_checkpoint_extras_and_errors(paper_world, tmp_path):
     data, world = paper_world
     f = seif.make_filter("seif", seif.start_pose(data), paper_config(world))
