@@ -201,3 +201,32 @@ TEST(DeferredMotion, ASingularIncrementIsRefusedWhenItComes) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(DeferredMotion, FinishAppliesTheHeldControls) {
+  // A run that ends between observations: finish() applies what is held (one motion update
+  // on the robot-active block: blocks touched), moving no estimate, and the final structure
+  // is the immediate filter's.
+  const test::Scenario s = withGaps(test::makeScenario(6, 40, 63, 4.0), 6);  // steps 61 and 62 unobserved
+  auto immediate = makeFilter("seif:mean=exact", s.start, test::configFor(s));
+  auto deferred = makeFilter("seif:mean=exact,motion=deferred", s.start, test::configFor(s));
+  for (const auto& step : s.steps) {
+    immediate->step(step.u, step.observations);
+    deferred->step(step.u, step.observations);
+  }
+  immediate->finish();
+  const Pose2 held = deferred->pose();
+  const std::size_t touched = deferred->stats().blocks_touched;
+  deferred->finish();
+  EXPECT_GE(deferred->stats().blocks_touched, touched + 49) << "the 7 x 7 block gathered and scattered";
+  EXPECT_EQ(deferred->pose(), held) << "finish() moves no estimate";
+  const std::size_t after = deferred->stats().blocks_touched;
+  deferred->finish();
+  EXPECT_EQ(deferred->stats().blocks_touched, after) << "nothing is held any more";
+  EXPECT_EQ(deferred->stats().links, immediate->stats().links);
+  EXPECT_EQ(deferred->stats().robot_links, immediate->stats().robot_links);
+  EXPECT_LT((deferred->pose() - immediate->pose()).norm(), 1e-9);
+}
+
+}  // namespace

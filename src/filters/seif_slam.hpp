@@ -53,7 +53,10 @@ class SeifSlam final : public SlamFilter {
   Vec2 landmark(int id) const override;
   Mat2 landmarkCovariance(int id) const override;
   Eigen::Matrix<double, Eigen::Dynamic, 2> landmarkCovarianceColumns(int id) const override;
+  /// H as stored: with deferred motion, without the links the held controls will add.
   FilterStats stats() const override;
+  /// Applies the controls deferred motion holds (SeifOptions::Motion::Deferred).
+  void finish() override { settleMotion(); }
   std::size_t robotLinks() const override { return store_.robotLinks().size(); }
   std::size_t rejectedObservations() const override { return book_.rejected(); }
   std::size_t blocksTouched() const override { return store_.blocksTouched(); }

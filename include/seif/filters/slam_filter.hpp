@@ -152,8 +152,9 @@ class SlamFilter {
     update(observations);
   }
 
-  /// Called once after the last step. A filter has nothing left to do; a smoother (the
-  /// batch MAP) solves here, and its estimates before finish() are only its initial guess.
+  /// Called once after the last step. A filter has nothing left to do (a SEIF with deferred
+  /// motion applies the controls it holds); a smoother (the batch MAP) solves here, and its
+  /// estimates before finish() are only its initial guess.
   virtual void finish() {}
   /// The smoothed pose of every step (the start pose first, then one per step), for a
   /// smoother after finish(); empty for a filter, whose trajectory is the pose after each step.
