@@ -242,11 +242,13 @@ TEST(SeifStore, RejectsALandmarkListedTwiceInABlockAndStaysUsable) {
   const Eigen::MatrixXd H_before(f.store.sparseInformation());
   const std::vector<int> twice{0, 2, 0};
   EXPECT_THROW(f.store.gather(twice), seif::InvalidArgument);
-  for (int s = 0; s < 4; ++s) EXPECT_EQ(f.store.node(s).gathered, -1) << s;
+  // A mark left behind would make the next block that lists the landmark "listed twice".
   const std::vector<int> order{2, 0, 1};
-  f.store.gather(order);
+  EXPECT_NO_THROW(f.store.gather(order));
   f.store.scatter();
-  for (int s = 0; s < 4; ++s) EXPECT_EQ(f.store.node(s).gathered, -1) << s;
+  const std::vector<int> all{3, 1, 0, 2};
+  EXPECT_NO_THROW(f.store.gather(all));
+  f.store.scatter();
   EXPECT_EQ(Eigen::MatrixXd(f.store.sparseInformation()), H_before);
 }
 

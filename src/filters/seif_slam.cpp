@@ -249,7 +249,10 @@ void SeifSlam::applyUpdate(std::span<const Observation> observations, const Meas
       // it (every update, after the relaxation: b' = b + (H' - H) mu needs the mean H and b
       // hold), at its mean before the held controls, so their noise enters at a fresh anchor.
       if (amortized) recoverMean(pending_controls_ <= 1);
-      if (config_.linearization == Linearization::Invariant) store_.reanchorRobot();
+      if (config_.linearization == Linearization::Invariant) {
+        store_.reanchorRobot();
+        invalidateFactor();  // H changed (a query settles the held motion first anyway)
+      }
       return;
     }
     flushMotion();

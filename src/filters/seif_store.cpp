@@ -54,9 +54,7 @@ SeifStore::Node& SeifStore::write(int slot) {
   Journal& j = journal_;
   if (j.open && node.journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
     j.entries.push_back({slot, true, j.saved.size()});
-    j.saved.push_back({node.H, node.bound, node.b, node.mu, node.anchor, node.active, j.saved_links.size(),
-                       node.links.size()});
-    j.saved_links.insert(j.saved_links.end(), node.links.begin(), node.links.end());
+    j.saved.push_back({node.H, node.bound, node.b, node.mu, node.anchor, node.active, node.links.size()});
     node.journaled = j.id;
   }
   return node;
@@ -73,13 +71,27 @@ Vec2& SeifStore::writeMean(int slot) {
   return node.mu;
 }
 
+Mat2& SeifStore::writeLink(int slot, std::size_t index) {
+  Link& l = nodes_[static_cast<std::size_t>(slot)].links[index];
+  Journal& j = journal_;
+  // Saved on every change (restored latest first, so the earliest value wins): cheaper than
+  // marking each link, and a step changes each link a few times at most.
+  if (j.open && static_cast<std::size_t>(slot) < j.nodes) j.saved_links.push_back({slot, index, l.H});
+  return l.H;
+}
+
 void SeifStore::rollbackTransaction() {
   Journal& j = journal_;
   if (!j.open) return;
   if (j.means_saved) {
     for (std::size_t s = 0; s < j.nodes; ++s) nodes_[s].mu = j.means[s];
   }
-  // Latest first, so that each field ends at its earliest saved value.
+  // Latest first, so that each field ends at its earliest saved value; the link values
+  // before the nodes, whose restore drops the links the step added.
+  for (std::size_t k = j.saved_links.size(); k-- > 0;) {
+    const Journal::SavedLink& l = j.saved_links[k];
+    nodes_[static_cast<std::size_t>(l.slot)].links[l.index].H = l.H;
+  }
   for (std::size_t k = j.entries.size(); k-- > 0;) {
     const Journal::Entry& e = j.entries[k];
     Node& node = nodes_[static_cast<std::size_t>(e.slot)];
@@ -91,8 +103,7 @@ void SeifStore::rollbackTransaction() {
       node.mu = n.mu;
       node.anchor = n.anchor;
       node.active = n.active;
-      const auto first = j.saved_links.begin() + static_cast<std::ptrdiff_t>(n.links_begin);
-      node.links.assign(first, first + static_cast<std::ptrdiff_t>(n.links_count));
+      node.links.resize(n.links_count);  // only shrinks: links grow at the end within a step
     } else {
       node.mu = j.means_of[e.index];
     }
@@ -117,8 +128,9 @@ void SeifStore::requireNoTransaction(const char* what) const {
 // ---------------------------------------------------------------- links ---------------
 
 Mat2* SeifStore::link(int a, int c) {
-  for (Link& l : write(a).links) {
-    if (l.slot == c) return &l.H;
+  const std::vector<Link>& links = write(a).links;
+  for (std::size_t i = 0; i < links.size(); ++i) {
+    if (links[i].slot == c) return &writeLink(a, i);
   }
   return nullptr;
 }
@@ -356,8 +368,9 @@ void SeifStore::setMean(const Eigen::VectorXd& mu) {
 class SeifStore::GatheredMarks {
  public:
   explicit GatheredMarks(SeifStore& store) : store_(store) {
+    if (store.gathered_at_.size() < store.nodes_.size()) store.gathered_at_.resize(store.nodes_.size(), -1);
     for (std::size_t i = 0; i < store.gathered_.size(); ++i) {
-      int& mark = store.nodes_[static_cast<std::size_t>(store.gathered_[i])].gathered;
+      int& mark = store.gathered_at_[static_cast<std::size_t>(store.gathered_[i])];
       if (mark >= 0) {
         clear(i);
         throw InvalidArgument("seif: a landmark listed twice in a local block");
@@ -371,7 +384,7 @@ class SeifStore::GatheredMarks {
 
  private:
   void clear(std::size_t count) {
-    for (std::size_t i = 0; i < count; ++i) store_.nodes_[static_cast<std::size_t>(store_.gathered_[i])].gathered = -1;
+    for (std::size_t i = 0; i < count; ++i) store_.gathered_at_[static_cast<std::size_t>(store_.gathered_[i])] = -1;
   }
   SeifStore& store_;
 };
@@ -414,7 +427,7 @@ void SeifStore::gatherListed() {
       local_H_.block<2, 3>(r, 0) = H_xl.transpose();
     }
     for (const Link& l : n_a.links) {  // H_{a,c} from a's side for each later c in the block
-      const int j = nodes_[static_cast<std::size_t>(l.slot)].gathered;
+      const int j = gathered_at_[static_cast<std::size_t>(l.slot)];
       if (j <= i) continue;
       const int c = 3 + 2 * j;
       local_H_.block<2, 2>(r, c) = l.H;
@@ -440,11 +453,12 @@ void SeifStore::scatter() {
       node.b = local_b_.segment<2>(r);
       node.mu = local_mu_.segment<2>(r);
       if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
-      for (Link& l : node.links) {
-        const int j = nodes_[static_cast<std::size_t>(l.slot)].gathered;
+      for (std::size_t e = 0; e < node.links.size(); ++e) {
+        const int j = gathered_at_[static_cast<std::size_t>(node.links[e].slot)];
         if (j < 0) continue;
         linked[static_cast<std::size_t>(std::min(i, j))].set(static_cast<std::size_t>(std::max(i, j)));
-        l.H = i < j ? Mat2(local_H_.block<2, 2>(r, 3 + 2 * j)) : Mat2(local_H_.block<2, 2>(3 + 2 * j, r).transpose());
+        writeLink(gathered_[static_cast<std::size_t>(i)], e) =
+            i < j ? Mat2(local_H_.block<2, 2>(r, 3 + 2 * j)) : Mat2(local_H_.block<2, 2>(3 + 2 * j, r).transpose());
       }
     }
   }
