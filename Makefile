@@ -32,10 +32,15 @@ bench: build
 # `make test`, not again here. Any report fails the run; a
 # sanitized process exits 99, so a test expecting the CLI to fail (status 1 or 2) cannot
 # mistake a report for the failure it wanted.
+# -O1 with line tables (-g1): ASan's usual optimisation level. With UBSan, GCC compiles a
+# file at -O2 -g in twice the time (seif_slam.cpp: 80 s against 39 s), and the build is most
+# of this target's time; reports still name file and line.
+SANITIZE_OPT ?= -O1 -g1 -DNDEBUG
 sanitize: export ASAN_OPTIONS = detect_leaks=1:halt_on_error=1:exitcode=99:print_stacktrace=1:check_initialization_order=1:strict_init_order=1:detect_stack_use_after_return=1
 sanitize: export UBSAN_OPTIONS = halt_on_error=1:exitcode=99:print_stacktrace=1
 sanitize: deps
-	@cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSEIF_SANITIZE=ON -DSEIF_BUILD_BENCH=OFF $(CMAKE_FLAGS) >/dev/null
+	@cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=$(SANITIZE_OPT)" \
+	  -DSEIF_SANITIZE=ON -DSEIF_BUILD_BENCH=OFF $(CMAKE_FLAGS) >/dev/null
 	@MAKEFLAGS= cmake --build build-sanitize -j $(JOBS) -- --no-print-directory
 	@cd build-sanitize && ctest --output-on-failure -j $(JOBS) -LE slow
 
