@@ -122,8 +122,9 @@ class SeifStore {
 
   // ---- transactions: a step all or nothing
   /// Journals every change until commitTransaction() or rollbackTransaction(): the robot's
-  /// state and links once, each landmark node before its first change, the means once if
-  /// setMean() runs. O(what the step touches); no allocation once the journal has grown.
+  /// state and links once, each landmark node's own blocks and link count before its first
+  /// change, each link's value before each change (writeLink()), the means once if setMean()
+  /// runs. O(what the step touches); no allocation once the journal has grown.
   void beginTransaction();
   void commitTransaction();
   /// Restores the store exactly as it was at beginTransaction(). marginalizeLandmark(),
