@@ -368,9 +368,8 @@ void SeifStore::setMean(const Eigen::VectorXd& mu) {
 class SeifStore::GatheredMarks {
  public:
   explicit GatheredMarks(SeifStore& store) : store_(store) {
-    if (store.gathered_at_.size() < store.nodes_.size()) store.gathered_at_.resize(store.nodes_.size(), -1);
     for (std::size_t i = 0; i < store.gathered_.size(); ++i) {
-      int& mark = store.gathered_at_[static_cast<std::size_t>(store.gathered_[i])];
+      int& mark = store.nodes_[static_cast<std::size_t>(store.gathered_[i])].gathered;
       if (mark >= 0) {
         clear(i);
         throw InvalidArgument("seif: a landmark listed twice in a local block");
@@ -384,7 +383,7 @@ class SeifStore::GatheredMarks {
 
  private:
   void clear(std::size_t count) {
-    for (std::size_t i = 0; i < count; ++i) store_.gathered_at_[static_cast<std::size_t>(store_.gathered_[i])] = -1;
+    for (std::size_t i = 0; i < count; ++i) store_.nodes_[static_cast<std::size_t>(store_.gathered_[i])].gathered = -1;
   }
   SeifStore& store_;
 };
@@ -427,7 +426,7 @@ void SeifStore::gatherListed() {
       local_H_.block<2, 3>(r, 0) = H_xl.transpose();
     }
     for (const Link& l : n_a.links) {  // H_{a,c} from a's side for each later c in the block
-      const int j = gathered_at_[static_cast<std::size_t>(l.slot)];
+      const int j = nodes_[static_cast<std::size_t>(l.slot)].gathered;
       if (j <= i) continue;
       const int c = 3 + 2 * j;
       local_H_.block<2, 2>(r, c) = l.H;
@@ -454,7 +453,7 @@ void SeifStore::scatter() {
       node.mu = local_mu_.segment<2>(r);
       if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
       for (std::size_t e = 0; e < node.links.size(); ++e) {
-        const int j = gathered_at_[static_cast<std::size_t>(node.links[e].slot)];
+        const int j = nodes_[static_cast<std::size_t>(node.links[e].slot)].gathered;
         if (j < 0) continue;
         linked[static_cast<std::size_t>(std::min(i, j))].set(static_cast<std::size_t>(std::max(i, j)));
         writeLink(gathered_[static_cast<std::size_t>(i)], e) =

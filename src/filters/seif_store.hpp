@@ -28,11 +28,12 @@ class SeifStore {
     long last_seen;  // step() of its last observation
   };
   // The fields are ordered by when they are read. The first 64 bytes hold what a neighbour's
-  // visit reads (mu, active) with H; the next 64 what relaxing the node itself adds
+  // visit reads (mu, active, gathered) with H; the next 64 what relaxing the node itself adds
   // (b, links); the bound, used only with SeifOptions::bounds, comes last. 160 bytes.
   struct Node {
     Vec2 mu = Vec2::Zero();
     int active = -1;    // position in robotLinks(), or -1 when passive
+    int gathered = -1;  // position in the local block while gather()/scatter() run, else -1
     long mean_journaled = -1;  // the transaction that saved its mean last
     Mat2 H = Mat2::Zero();
     Vec2 b = Vec2::Zero();
@@ -198,7 +199,7 @@ class SeifStore {
   /// H_{a,c} for a change (write(a)), or nullptr when they are not linked.
   Mat2* link(int a, int c);
   void gatherListed();  // gather() of gathered_
-  /// Marks each gathered landmark with its position (gathered_at_) for the life of the
+  /// Marks each gathered landmark with its position (Node::gathered) for the life of the
   /// object, so that a node's links to the block are found in one pass over its links.
   class GatheredMarks;
   /// Links landmark `slot` to the robot (activates it) with a zero block; its position.
@@ -221,10 +222,6 @@ class SeifStore {
 
   // The gathered block, reused every step (no allocation in the steady state).
   std::vector<int> gathered_;
-  /// Per slot: its position in the local block while gather()/scatter() run, else -1. Apart
-  /// from the nodes, so that a pass over a node's links to find those into the block reads
-  /// 4 bytes per neighbour, not a neighbour's node. Grows with the map; -1 between steps.
-  std::vector<int> gathered_at_;
   LocalMatrix local_H_;
   LocalVector local_b_;
   LocalVector local_mu_;
