@@ -49,7 +49,8 @@ void bindSeifOptions(py::module_& m) {
   bindNamedEnum<SeifOptions::Sparsify>(o, "Sparsify", "'seif' | 'eseif'", &SeifOptions::parseSparsify,
                                        &nameOf<SeifOptions::Sparsify>)
       .value("Seif", SeifOptions::Sparsify::Seif)
-      .value("Eseif", SeifOptions::Sparsify::Eseif);
+      .value("Eseif", SeifOptions::Sparsify::Eseif)
+      .value("Conservative", SeifOptions::Sparsify::Conservative);
   bindNamedEnum<SeifOptions::Covariance>(o, "Covariance", "'exact' | 'local' | 'conservative'",
                                          &SeifOptions::parseCovariance, &nameOf<SeifOptions::Covariance>)
       .value("Exact", SeifOptions::Covariance::Exact)

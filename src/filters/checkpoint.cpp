@@ -92,7 +92,7 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   o.recovery = static_cast<SeifOptions::Recovery>(in.u64Max("recovery", 1));
   o.relax_order = static_cast<SeifOptions::RelaxOrder>(in.u64Max("relax order", 1));
   o.seed = in.u64("seed");
-  o.sparsify = static_cast<SeifOptions::Sparsify>(in.u64Max("sparsify", 1));
+  o.sparsify = static_cast<SeifOptions::Sparsify>(in.u64Max("sparsify", in.version() >= 6 ? 2 : 1));
   o.covariance = static_cast<SeifOptions::Covariance>(in.u64Max("covariance", in.version() >= 4 ? 2 : 1));
   o.beta = static_cast<int>(in.i64In("beta", 2, kIntMax));
   if (in.version() >= 2) {

@@ -52,9 +52,10 @@ const std::array<FilterOption, 19> kOptions = {{
      "Gauss-Newton iterations of each measurement update (1: the EKF's single linearisation)",
      [](FilterSpec& s, std::string_view v) { s.iterations = static_cast<int>(parseInteger("iterations", v, 1, 20)); },
      [](const FilterSpec& s) { return std::to_string(s.iterations); }},
-    {"sparsify", kSeif, kChoice, "seif|eseif", 0, 0,
-     "how the robot's links are kept at `active`: the paper's conditioning (seif) or the ESEIF's "
-     "relocalisation from `beta` observations (eseif: nothing conditioned away)",
+    {"sparsify", kSeif, kChoice, "seif|eseif|conservative", 0, 0,
+     "how the robot's links are kept at `active`: the paper's conditioning (seif), the ESEIF's "
+     "relocalisation from `beta` observations (eseif: nothing conditioned away), or the paper's "
+     "conditioning with H scaled down until it claims no more than before (conservative)",
      [](FilterSpec& s, std::string_view v) { s.seif.sparsify = SeifOptions::parseSparsify(v); },
      [](const FilterSpec& s) { return std::string(optionName(s.seif.sparsify)); }},
     {"active", kSeif, kInteger, "", 1, kMaxLocalLandmarks - 1,

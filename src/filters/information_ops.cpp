@@ -4,6 +4,7 @@
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -352,6 +353,17 @@ FilterStats denseLinkStats(const Eigen::MatrixXd& H) {
   const std::size_t vars = static_cast<std::size_t>(landmarks) + 1;
   s.blocks_touched = vars * vars;
   return s;
+}
+
+double overclaimRatio(const Eigen::Ref<const Eigen::MatrixXd>& E, const Eigen::Ref<const Eigen::MatrixXd>& Sigma) {
+  // v^T E v <= c v^T Sigma^-1 v for all v  <=>  w^T (L^T E L) w <= c w^T w with v = L^-T w.
+  const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (Sigma + Sigma.transpose()));
+  if (llt.info() != Eigen::Success) throw NumericError("conservative sparsification: the block's covariance is not positive definite");
+  const Eigen::MatrixXd L = llt.matrixL();
+  const Eigen::MatrixXd M = L.transpose() * E * L;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (M + M.transpose()), Eigen::EigenvaluesOnly);
+  if (eig.info() != Eigen::Success) throw NumericError("conservative sparsification: no eigenvalues");
+  return std::max(0.0, eig.eigenvalues().maxCoeff());
 }
 
 }  // namespace seif

@@ -53,6 +53,13 @@ using LocalVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kM
 double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
                            const Eigen::Ref<const Eigen::VectorXd>& mu, int drop);
 
+/// The least c >= 0 with E <= c Sigma^-1 in the Loewner order: the largest eigenvalue of
+/// L^T E L (Sigma = L L^T), or 0 when E claims nothing. For E = H~ - H, the change a
+/// sparsification made to a block whose marginal covariance is Sigma, (H + E) / (1 + c) <= H
+/// (docs/consistency.md, "Conservative sparsification"). Throws NumericError unless Sigma is
+/// positive definite.
+double overclaimRatio(const Eigen::Ref<const Eigen::MatrixXd>& E, const Eigen::Ref<const Eigen::MatrixXd>& Sigma);
+
 /// ESEIF sparsification, its marginalisation (Walter, Eustice, Leonard 2007), on a dense
 /// block whose first three rows are the robot and which holds its whole Markov blanket
 /// (every variable linked to it): the Schur complement over the robot

@@ -54,7 +54,7 @@ void SeifSlam::relaxMean(int sweeps) {
   }
 }
 
-Eigen::VectorXd SeifSlam::exactMean() const { return factor().solve(informationVector()); }
+Eigen::VectorXd SeifSlam::exactMean() const { return factor().solve(store().informationVector()); }
 
 std::optional<Eigen::VectorXd> SeifSlam::posteriorMean() const {
   if (options_.mean == SeifOptions::Mean::Exact) return std::nullopt;

@@ -64,6 +64,8 @@ void SeifSlam::guarded(const Step& step) {
   if (options_.relax_order == SeifOptions::RelaxOrder::Random) rng = rng_;
   const std::optional<MotionIncrement> pending = pending_motion_;
   const std::size_t pending_controls = pending_controls_;
+  const double information_scale = information_scale_;
+  const std::size_t overclaims = overclaims_;
   store_.beginTransaction();
   try {
     step();
@@ -79,6 +81,8 @@ void SeifSlam::guarded(const Step& step) {
     if (rng) rng_ = *rng;
     pending_motion_ = pending;
     pending_controls_ = pending_controls;
+    information_scale_ = information_scale;
+    overclaims_ = overclaims;
     invalidateFactor();
     throw;
   }
@@ -102,7 +106,9 @@ void SeifSlam::applyMotion(const MotionIncrement& m) {
   // §1: Lemma 3 on the {robot, active} block, the only part of H that motion changes.
   store_.gatherActive();
   workspace_.resize(6, store_.localH().cols());
-  informationMotionUpdate(store_.localH(), store_.localB(), store_.localMean(), m.delta, m.J_delta_x, m.U,
+  // The store holds kappa H: the motion noise enters it as U / kappa (informationScale()).
+  const Mat3 U = information_scale_ == 1.0 ? m.U : Mat3(m.U / information_scale_);
+  informationMotionUpdate(store_.localH(), store_.localB(), store_.localMean(), m.delta, m.J_delta_x, U,
                           workspace_);
   store_.scatter();
   store_.moveRobotAnchor(m.delta.head<2>());  // T(a + d) T(a)^-1 is the standard G (invariant.hpp)
@@ -127,6 +133,11 @@ void SeifSlam::settleMotion() const {
 
 Vec3 SeifSlam::robotMean() const {
   return pending_motion_ ? Vec3(store_.robotMean() + pending_motion_->delta) : store_.robotMean();
+}
+
+Mat2 SeifSlam::scaledNoiseInverse(const MeasurementModel& sensor, const Observation& z) const {
+  const Mat2 R_inv = sensor.noise(z).inverse();
+  return information_scale_ == 1.0 ? R_inv : Mat2(information_scale_ * R_inv);  // the store holds kappa H
 }
 
 void SeifSlam::measurementUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
@@ -163,7 +174,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
     std::optional<Anchors> anchors;
     if (invariant) anchors = Anchors{store_.robotAnchor(), store_.node(p.slot).anchor};
     const MeasurementInformation info = measurementInformation(sensor, x, store_.node(p.slot).mu, *p.z,
-                                                               sensor.noise(*p.z).inverse(), p.jacobian_landmark,
+                                                               scaledNoiseInverse(sensor, *p.z), p.jacobian_landmark,
                                                                anchors, p.constraint);
     // A new landmark's bound from its first observation and the robot's bound now.
     const bool fresh = bounds && p.first;
@@ -191,7 +202,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
       const PlannedObservation& p = plan[k];
       if (p.first) continue;
       store_.addObservation(p.slot, -infos_[k].H, -infos_[k].b);
-      infos_[k] = measurementInformation(sensor, xi, store_.node(p.slot).mu, *p.z, sensor.noise(*p.z).inverse(),
+      infos_[k] = measurementInformation(sensor, xi, store_.node(p.slot).mu, *p.z, scaledNoiseInverse(sensor, *p.z),
                                          p.jacobian_landmark, anchors_[k], p.constraint);
       store_.addObservation(p.slot, infos_[k].H, infos_[k].b);
     }
@@ -389,17 +400,18 @@ Vec2 SeifSlam::landmark(int id) const { return store_.node(book_.require(id)).mu
 
 // The marginals are read off the selected inverse of the cached factor (SparseMarginals):
 // H stores every robot and landmark diagonal block in full, so each lies in its pattern.
+// Each covariance read from the store (kappa H) is multiplied by kappa (informationScale()).
 Mat3 SeifSlam::poseCovariance() const {
-  if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance({-1});
-  if (options_.covariance == SeifOptions::Covariance::Conservative) return localCovariance({-1}, true);
-  return factor().covarianceBlock<3>(0);
+  if (options_.covariance == SeifOptions::Covariance::Local) return information_scale_ * localCovariance({-1});
+  if (options_.covariance == SeifOptions::Covariance::Conservative) return information_scale_ * localCovariance({-1}, true);
+  return information_scale_ * factor().covarianceBlock<3>(0);
 }
 
 Mat2 SeifSlam::landmarkCovariance(int id) const {
   const int slot = book_.require(id);
-  if (options_.covariance == SeifOptions::Covariance::Local) return localCovariance({slot});
-  if (options_.covariance == SeifOptions::Covariance::Conservative) return localCovariance({slot}, true);
-  return factor().covarianceBlock<2>(StateLayout::landmark(slot));
+  if (options_.covariance == SeifOptions::Covariance::Local) return information_scale_ * localCovariance({slot});
+  if (options_.covariance == SeifOptions::Covariance::Conservative) return information_scale_ * localCovariance({slot}, true);
+  return information_scale_ * factor().covarianceBlock<2>(StateLayout::landmark(slot));
 }
 
 Eigen::MatrixXd SeifSlam::localCovariance(std::initializer_list<int> vars, bool conservative) const {
@@ -461,12 +473,12 @@ Marginal SeifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalM
     }
   }
   if (mode == MarginalMode::Local) {
-    m.covariance = localCovariance(vars);
+    m.covariance = information_scale_ * localCovariance(vars);
     return m;
   }
   if (mode == MarginalMode::Conservative) {
     requireBounds();
-    m.covariance = localCovariance(vars, true);
+    m.covariance = information_scale_ * localCovariance(vars, true);
     return m;
   }
   // Exact: one solve with the cached sparse factor per column, H Sigma_{:,i} = e_i.
@@ -476,7 +488,7 @@ Marginal SeifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalM
   for (std::size_t k = 0; k < rows.size(); ++k) {
     e.setZero();
     e(rows[k]) = 1.0;
-    m.covariance.col(static_cast<Eigen::Index>(k)) = factor().solve(e)(rows);
+    m.covariance.col(static_cast<Eigen::Index>(k)) = information_scale_ * factor().solve(e)(rows);
   }
   return m;
 }
@@ -489,7 +501,7 @@ Eigen::Matrix<double, Eigen::Dynamic, 2> SeifSlam::landmarkCovarianceColumns(int
   for (int c = 0; c < 2; ++c) {
     e.setZero();
     e(i + c) = 1.0;
-    cols.col(c) = factor().solve(e);
+    cols.col(c) = information_scale_ * factor().solve(e);
   }
   return cols;
 }

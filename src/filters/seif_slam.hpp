@@ -74,11 +74,18 @@ class SeifSlam final : public SlamFilter {
     settleMotion();
     return store_;
   }
-  /// H as a sparse matrix and b, in the state order [x, y, th, landmarks...].
-  Eigen::SparseMatrix<double> sparseInformation() const { return store().sparseInformation(); }
+  /// H as a sparse matrix and b, in the state order [x, y, th, landmarks...] (the store's
+  /// divided by informationScale()).
+  Eigen::SparseMatrix<double> sparseInformation() const { return store().sparseInformation() / information_scale_; }
   /// Its lower triangle, what the factorisation reads (SeifStore::lowerInformation).
-  Eigen::SparseMatrix<double> lowerInformation() const { return store().lowerInformation(); }
-  Eigen::VectorXd informationVector() const { return store().informationVector(); }
+  Eigen::SparseMatrix<double> lowerInformation() const { return store().lowerInformation() / information_scale_; }
+  Eigen::VectorXd informationVector() const { return store().informationVector() / information_scale_; }
+  /// kappa: the store holds kappa H and kappa b (Sparsify::Conservative scales the posterior's
+  /// information down by raising kappa, in O(1): every later step's information enters the
+  /// store times kappa, every covariance leaves it times kappa). 1 with the other rules.
+  double informationScale() const { return information_scale_; }
+  /// Sparsifications under Sparsify::Conservative that raised kappa.
+  std::size_t overclaims() const { return overclaims_; }
   /// The exact mean H^-1 b (sparse Cholesky), without changing the filter.
   Eigen::VectorXd exactMean() const;
   /// Runs `sweeps` full Gauss-Seidel sweeps of the mean over every variable.
@@ -87,7 +94,7 @@ class SeifSlam final : public SlamFilter {
   /// SeifOptions::bounds, else InvalidArgument).
   Mat2 covarianceBound(int id) const {
     requireBounds();
-    return store_.node(book_.require(id)).bound;
+    return information_scale_ * store_.node(book_.require(id)).bound;
   }
   /// Sets every landmark's bound to its exact marginal covariance, the tightest bound: one
   /// sparse factorisation, O(N) at the paper's sparsity (a checkpoint without bounds; a
@@ -136,6 +143,8 @@ class SeifSlam final : public SlamFilter {
   void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
   void measurementUpdate(std::span<const Observation> z,
                          const MeasurementModel& sensor);  ///< §3, eq. (21-22)
+  /// R^-1 of z, times kappa (informationScale()): the information it adds to the store.
+  Mat2 scaledNoiseInverse(const MeasurementModel& sensor, const Observation& z) const;
   void sparsify();                                         ///< §4, eq. (44-51)
   /// The joint covariance of `vars` (-1: the robot, else slots) from H restricted to a
   /// blanket around them of at most options_.blanket more variables (MarginalMode::Local);
@@ -175,6 +184,12 @@ class SeifSlam final : public SlamFilter {
   void reanchorLandmark(int slot, const Vec2& to);
   /// InvalidArgument unless SeifOptions::bounds.
   void requireBounds() const;
+  /// Sparsify::Conservative (seif_sparsify_conservative.cpp), around deactivateSurplus()'s
+  /// eq. (44-51) on the gathered block [x, order_]: before, the block's local marginal
+  /// covariance and its information; after, raises kappa so that H / kappa claims no more
+  /// than before over the block's blanket.
+  void beginConservativeSparsification();
+  void endConservativeSparsification();
 
   FilterConfig config_;
   LandmarkBook book_;
@@ -190,6 +205,8 @@ class SeifSlam final : public SlamFilter {
   /// and how many controls they hold.
   std::optional<MotionIncrement> pending_motion_;
   std::size_t pending_controls_ = 0;
+  double information_scale_ = 1.0;  // kappa (informationScale())
+  std::size_t overclaims_ = 0;      // Sparsify::Conservative steps that raised kappa
 
   // Work buffers, reused every step (no allocation in the steady state).
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxLocalDim> workspace_;
@@ -206,6 +223,8 @@ class SeifSlam final : public SlamFilter {
   std::vector<int> bound_slots_;
   LocalMatrix bound_prior_;
   LocalMatrix bound_added_;
+  Eigen::MatrixXd overclaim_sigma_;  // Sparsify::Conservative: the block's marginal before
+  LocalMatrix overclaim_h_;          // and its information before eq. (44-51)
   BoundWorkspace bound_ws_;
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
 

@@ -1,6 +1,7 @@
 // The paper's sparsification (SeifOptions::Sparsify::Seif; algorithm.md §4, paper eq.
 // 44-51): the surplus of active landmarks is conditioned away. One file per sparsifier:
-// this one and seif_sparsify_eseif.cpp; SeifSlam::update chooses by SeifOptions::sparsify.
+// this one, seif_sparsify_eseif.cpp and seif_sparsify_conservative.cpp (this rule with the
+// information scaled down after it); SeifSlam::update chooses by SeifOptions::sparsify.
 #include "filters/seif_slam.hpp"
 
 #include <algorithm>
@@ -34,14 +35,18 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
   order_.clear();
   for (int i = drop; i < k; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y+
   for (int i = 0; i < drop; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y0
+  const bool conservative = options_.sparsify == SeifOptions::Sparsify::Conservative;
+  if (conservative) beginConservativeSparsification();
   store_.gather(order_);
   if (solve_active_mean_first) store_.solveLocalMean();
   LocalMatrix& H = store_.localH();
+  if (conservative) overclaim_h_ = H;
   const double residual = sparsifyInformation(H, store_.localB(), store_.localMean(), drop);
   last_sparsification_residual_ = std::max(last_sparsification_residual_, residual);
   const Eigen::Index y0 = H.rows() - 2 * drop;
   H.block(0, y0, 3, 2 * drop).setZero();
   H.block(y0, 0, 2 * drop, 3).setZero();
+  if (conservative) endConservativeSparsification();
   store_.scatter();
   invalidateFactor();
   for (int i = 0; i < drop; ++i) store_.removeRobotLink(ranking_[static_cast<std::size_t>(i)].second);

@@ -4,6 +4,7 @@
 #include "checkpoint_access.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <string>
 
@@ -157,6 +158,8 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
     out.fixed(f.pending_motion_->U);
     out.u64(f.pending_controls_);
   }
+  out.f64(f.information_scale_);  // Sparsify::Conservative's kappa
+  out.u64(f.overclaims_);
 }
 
 void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
@@ -187,6 +190,13 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
     f.pending_controls_ = static_cast<std::size_t>(in.u64("deferred controls"));
     if (f.pending_controls_ == 0) in.fail("a deferred motion of no controls");
     f.pending_motion_ = m;
+  }
+  f.information_scale_ = 1.0;
+  f.overclaims_ = 0;
+  if (in.version() >= 6) {
+    f.information_scale_ = in.f64("information scale");
+    if (!(f.information_scale_ >= 1.0) || !std::isfinite(f.information_scale_)) in.fail("information scale must be finite and >= 1");
+    f.overclaims_ = static_cast<std::size_t>(in.u64("overclaims"));
   }
   f.invalidateFactor();
 }

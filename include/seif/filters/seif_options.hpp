@@ -11,7 +11,7 @@ struct SeifOptions {
   enum class Deactivate { Weakest, Oldest };
   enum class Recovery { AfterMeasurement, BeforeMeasurement };
   enum class RelaxOrder { Random, Cyclic };
-  enum class Sparsify { Seif, Eseif };
+  enum class Sparsify { Seif, Eseif, Conservative };
   enum class Covariance { Exact, Local, Conservative };
   enum class Motion { Immediate, Deferred };
 
@@ -38,7 +38,10 @@ struct SeifOptions {
   /// How the robot's links are kept at `active`: Seif conditions the surplus away (paper
   /// eq. 44-51; overconfident, Eustice et al. 2005). Eseif marginalises the robot out and
   /// relocalises it from part of the current measurements (Walter, Eustice, Leonard 2007):
-  /// H stays exactly sparse and nothing is conditioned away.
+  /// H stays exactly sparse and nothing is conditioned away. Conservative: the paper's rule,
+  /// then H and b scaled by 1 / (1 + c) with the least c for which the result claims no
+  /// more than H did over the sparsified block's blanket (docs/consistency.md,
+  /// "Conservative sparsification"): the mean is kept, the covariance inflated; O(1).
   Sparsify sparsify = Sparsify::Seif;
   /// How poseCovariance() and landmarkCovariance() are recovered. Exact: from the sparse
   /// Cholesky factor of H and its selected inverse, one factorisation per changed H (O(N)
@@ -87,7 +90,7 @@ struct SeifOptions {
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
   static Recovery parseRecovery(std::string_view s);      ///< "after-update" | "before-update"
   static RelaxOrder parseRelaxOrder(std::string_view s);  ///< "random" | "cyclic"
-  static Sparsify parseSparsify(std::string_view s);      ///< "seif" | "eseif"
+  static Sparsify parseSparsify(std::string_view s);      ///< "seif" | "eseif" | "conservative"
   static Covariance parseCovariance(std::string_view s);  ///< "exact" | "local" | "conservative"
   static Motion parseMotion(std::string_view s);          ///< "immediate" | "deferred"
 };
