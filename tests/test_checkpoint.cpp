@@ -151,6 +151,7 @@ INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
                                            "seif:linearization=invariant,iterations=2,bounds=true",
                                            "seif:sparsify=eseif,covariance=conservative",
                                            "seif:motion=deferred",
+                                           "seif:profile=consistent,active=20,sparsify=conservative",
                                            "seif:profile=consistent,motion=deferred,bounds=true"));
 
 TEST(Checkpoint, RandomOrderDependsOnTheSavedEngine) {

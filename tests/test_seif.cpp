@@ -1,6 +1,7 @@
 // The SEIF: exact where the paper is exact, the sparsification's guarantees, invariants
 // after every step, and convergence of the amortised mean.
 #include "scenario.hpp"
+#include "seif_steps.hpp"
 
 #include <seif/core/errors.hpp>
 #include "filters/eif_slam.hpp"
@@ -106,16 +107,6 @@ TEST(Seif, InvariantsHoldAfterEveryStepOfALongRun) {
   }
 }
 
-namespace seif {
-/// The SEIF's private steps, one at a time (SeifSlam befriends this test-only accessor).
-struct SeifStepsForTests {
-  static void motionUpdate(SeifSlam& f, const MotionIncrement& m) { f.motionUpdate(m); }
-  static void recoverMean(SeifSlam& f) { f.recoverMean(); }
-  static void measurementUpdate(SeifSlam& f, std::span<const Observation> z) { f.measurementUpdate(z, f.sensorModel()); }
-  static void recoverExactMean(SeifSlam& f) { f.recoverExactMean(); }
-  static void sparsify(SeifSlam& f) { f.sparsify(); }
-};
-}  // namespace seif
 
 TEST(Seif, SparsificationInsideTheFilterKeepsTheMeanAndZeroesTheLinks) {
   // The four steps run one by one: measurement update, exact mean, then sparsification,

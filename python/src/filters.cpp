@@ -362,7 +362,11 @@ void bindSlamFilter(py::module_& m) {
       .def("last_sparsification_residual", &SeifSlam::lastSparsificationResidual)
       .def_property_readonly("eseif_relocalizations", &SeifSlam::eseifRelocalizations)
       .def_property_readonly("eseif_deferrals", &SeifSlam::eseifDeferrals)
-      .def_property_readonly("eseif_fallbacks", &SeifSlam::eseifFallbacks);
+      .def_property_readonly("eseif_fallbacks", &SeifSlam::eseifFallbacks)
+      .def_property_readonly("information_scale", &SeifSlam::informationScale,
+                             "kappa: sparsify=conservative's store holds kappa H (covariances leave it times kappa)")
+      .def_property_readonly("overclaims", &SeifSlam::overclaims,
+                             "sparsifications under sparsify=conservative that scaled the information down");
   py::class_<BatchMap, SlamFilter>(m, "BatchMap", "The batch MAP smoother: estimates are final after finish().")
       .def(py::init<const Pose2&, const FilterConfig&, const BatchOptions&>(), py::arg("start"), py::arg("config"),
            py::arg("options") = BatchOptions{})

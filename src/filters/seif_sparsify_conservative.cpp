@@ -20,18 +20,41 @@
 
 namespace seif {
 
+namespace {
+
+/// When the rule keeps claiming much more than H holds (the standard Jacobians' SEIF with few
+/// active landmarks), kappa grows without limit: every later step's information outweighs
+/// the old by kappa, and H loses the start prior that fixes the global frame.
+[[noreturn]] void rethrowLost(const NumericError& e, long step, double kappa) {
+  throw NumericError("seif: conservative sparsification at step " + std::to_string(step) +
+                     " (information scaled down " + std::to_string(kappa) + " times so far): " + e.what() +
+                     "; the paper's rule claimed too much to keep: more active landmarks, or "
+                     "linearization=invariant (docs/consistency.md)");
+}
+
+}  // namespace
+
 void SeifSlam::beginConservativeSparsification() {
   // Before gather(): the block's marginal from the store's H (kappa H: Sigma / kappa).
   std::vector<int> vars;
   vars.reserve(order_.size() + 1);
   vars.push_back(-1);
   vars.insert(vars.end(), order_.begin(), order_.end());
-  overclaim_sigma_ = localCovariance(vars);
+  try {
+    overclaim_sigma_ = localCovariance(vars);
+  } catch (const NumericError& e) {
+    rethrowLost(e, store_.step(), information_scale_);
+  }
 }
 
 void SeifSlam::endConservativeSparsification() {
   const LocalMatrix& H = store_.localH();  // after eq. (44-51), before scatter()
-  const double c = overclaimRatio(H - overclaim_h_, overclaim_sigma_);
+  double c = 0.0;
+  try {
+    c = overclaimRatio(H - overclaim_h_, overclaim_sigma_);
+  } catch (const NumericError& e) {
+    rethrowLost(e, store_.step(), information_scale_);
+  }
   if (!(c < 1e12)) {  // also NaN
     throw NumericError("seif: conservative sparsification at step " + std::to_string(store_.step()) +
                        ": the rule claims " + std::to_string(c) + " times the information the block held");
