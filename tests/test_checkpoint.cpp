@@ -399,6 +399,11 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   EXPECT_FALSE(dynamic_cast<const SeifSlam&>(*seif3_file).options().bounds);
   EXPECT_THROW((void)seif3_file->marginal(seif3_file->landmarkIds(), true, MarginalMode::Conservative), InvalidArgument);
   EXPECT_EQ(dynamic_cast<const SeifSlam&>(*seif3).options().blanket, SeifOptions{}.blanket);
+  // Files before version 6 kept no information scale (sparsify=conservative's kappa): 1.
+  const auto seif4_file = load(root / "corpus" / "fuzz_checkpoint" / "seif-v4.ckpt");
+  EXPECT_TRUE(seif4_file->mean() == seif3->mean());
+  EXPECT_TRUE(seif4_file->information() == seif3->information());
+  EXPECT_EQ(dynamic_cast<const SeifSlam&>(*seif4_file).informationScale(), 1.0);
 }
 #endif
 
