@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace {
@@ -129,7 +130,7 @@ TEST(ConservativeSparsification, CovariancesAreTheScaledPosteriors) {
     seif.update(step.observations);
   }
   ASSERT_GT(seif.informationScale(), 1.5) << "a missing kappa would go unnoticed";
-  ASSERT_GT(seif.overclaims(), 0u);
+  ASSERT_GT(seif.informationScalings(), 0u);
   const Eigen::MatrixXd P = seif.information().inverse();
   EXPECT_LT((seif.covariance() - P).norm(), 1e-6 * P.norm());
   const Mat3 P_x = P.topLeftCorner(3, 3);
@@ -143,6 +144,43 @@ TEST(ConservativeSparsification, CovariancesAreTheScaledPosteriors) {
   EXPECT_LT((local.covariance - exact.covariance).norm(), 1e-6 * exact.covariance.norm());
   const Eigen::VectorXd b = seif.informationVector();
   EXPECT_LT((b - seif.information() * seif.exactMean()).norm(), 1e-8 * b.norm());
+}
+
+}  // namespace
+
+namespace {
+
+TEST(InformationKnob, RhoScalesTheInformationAtEachSparsification) {
+  // SeifOptions::rho (IJRR 2004 §5.3, H <- (1 - rho) H): kappa = (1 - rho)^-n after n
+  // sparsifications, the reported covariance the inverse of the reported information; rho = 0
+  // leaves the filter as it was, and a rho outside [0, 1) is refused.
+  const test::Scenario s = test::makeScenario(5, 30, 150);
+  seif::SeifOptions o;
+  o.active = 4;
+  o.rho = 0.05;
+  seif::SeifSlam seif(s.start, test::configFor(s), o);
+  seif::SeifOptions off = o;
+  off.rho = 0.0;
+  seif::SeifSlam plain(s.start, test::configFor(s), off);
+  for (const seif::Step& step : s.steps) {
+    seif.predict(step.u);
+    seif.update(step.observations);
+    plain.predict(step.u);
+    plain.update(step.observations);
+  }
+  ASSERT_GT(seif.informationScalings(), 20u);
+  EXPECT_NEAR(seif.informationScale(), std::pow(1.0 / 0.95, static_cast<double>(seif.informationScalings())),
+              1e-9 * seif.informationScale());
+  EXPECT_EQ(plain.informationScale(), 1.0);
+  EXPECT_EQ(plain.informationScalings(), 0u);
+  const Eigen::MatrixXd P = seif.information().inverse();
+  const seif::Mat3 P_x = P.topLeftCorner(3, 3);
+  EXPECT_LT((seif.poseCovariance() - P_x).norm(), 1e-6 * P_x.norm());
+  // The scaled filter is less sure of its pose than the plain one.
+  EXPECT_GT(seif.poseCovariance().trace(), 1.5 * plain.poseCovariance().trace());
+  seif::SeifOptions bad = o;
+  bad.rho = 1.0;
+  EXPECT_THROW(seif::SeifSlam(s.start, test::configFor(s), bad), seif::InvalidArgument);
 }
 
 }  // namespace

@@ -34,6 +34,7 @@ std::vector<std::string> valuesOf(const FilterOption& o) {
       break;
     case FilterOption::Kind::Seed: out = {"0", "18446744073709551615", "12345"}; break;
     case FilterOption::Kind::Length: out = {"0", "0.005", "2.5"}; break;
+    case FilterOption::Kind::Fraction: out = {"0", "0.01", "0.5"}; break;
     case FilterOption::Kind::Profile: out = {"consistent"}; break;
   }
   return out;

@@ -205,6 +205,13 @@ void FilterFlags::add(CLI::App& cmd, bool batch) {
           return {};
         });
         break;
+      case FilterOption::Kind::Fraction:
+        flag->check([](const std::string& v) -> std::string {
+          double d = 0.0;
+          if (!CLI::detail::lexical_cast(v, d) || !(d >= 0.0 && d < 1.0)) return "must be in [0, 1), found " + v;
+          return {};
+        });
+        break;
     }
     flag->capture_default_str();
   }

@@ -69,7 +69,7 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("relax_order", &SeifOptions::relax_order, "which K landmarks each step relaxes")
       .def_readwrite("motion", &SeifOptions::motion, "immediate (every control) or deferred (composed until an observation)")
       .def_readwrite("seed", &SeifOptions::seed, "seed of the random choice of relaxed landmarks")
-      .def_readwrite("sparsify", &SeifOptions::sparsify, "seif (the paper's conditioning) or eseif")
+      .def_readwrite("sparsify", &SeifOptions::sparsify, "seif (the paper's conditioning), eseif or conservative")
       .def_readwrite("covariance", &SeifOptions::covariance, "exact, local or conservative marginal covariances")
       .def_readwrite("beta", &SeifOptions::beta, "ESEIF: landmarks whose observations relocalise the robot")
       .def_readwrite("reanchor", &SeifOptions::reanchor,
@@ -79,9 +79,11 @@ void bindSeifOptions(py::module_& m) {
                      "first (0: the whole Markov blanket)")
       .def_readwrite("bounds", &SeifOptions::bounds,
                      "keep an upper bound on every landmark's covariance (MarginalMode.Conservative)")
+      .def_readwrite("rho", &SeifOptions::rho,
+                     "the journal paper's knob: H and b scaled by 1 - rho at each sparsification (0: off)")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion"});
+                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho"});
       });
 }
 
@@ -365,8 +367,8 @@ void bindSlamFilter(py::module_& m) {
       .def_property_readonly("eseif_fallbacks", &SeifSlam::eseifFallbacks)
       .def_property_readonly("information_scale", &SeifSlam::informationScale,
                              "kappa: sparsify=conservative's store holds kappa H (covariances leave it times kappa)")
-      .def_property_readonly("overclaims", &SeifSlam::overclaims,
-                             "sparsifications under sparsify=conservative that scaled the information down");
+      .def_property_readonly("information_scalings", &SeifSlam::informationScalings,
+                             "sparsifications that scaled the information down (sparsify=conservative, rho)");
   py::class_<BatchMap, SlamFilter>(m, "BatchMap", "The batch MAP smoother: estimates are final after finish().")
       .def(py::init<const Pose2&, const FilterConfig&, const BatchOptions&>(), py::arg("start"), py::arg("config"),
            py::arg("options") = BatchOptions{})

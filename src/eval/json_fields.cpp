@@ -22,7 +22,8 @@ nlohmann::json toJson(const SeifOptions& o) {
       case FilterOption::Kind::Choice: j[std::string(option.key)] = value; break;
       case FilterOption::Kind::Integer: j[std::string(option.key)] = std::stoll(value); break;
       case FilterOption::Kind::Seed: j[std::string(option.key)] = std::stoull(value); break;
-      case FilterOption::Kind::Length: j[std::string(option.key)] = std::stod(value); break;
+      case FilterOption::Kind::Length:
+      case FilterOption::Kind::Fraction: j[std::string(option.key)] = std::stod(value); break;
       case FilterOption::Kind::Profile: break;
     }
   }

@@ -79,6 +79,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.i64(o.blanket);
   out.u64(o.bounds ? 1 : 0);
   out.u64(static_cast<std::uint64_t>(o.motion));
+  out.f64(o.rho);
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -103,6 +104,10 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   o.blanket = in.version() >= 3 ? static_cast<int>(in.i64In("blanket", 0, kIntMax)) : 0;
   o.bounds = in.version() >= 4 && in.u64Max("bounds", 1) == 1;  // earlier files kept none
   if (in.version() >= 5) o.motion = static_cast<SeifOptions::Motion>(in.u64Max("motion", 1));
+  if (in.version() >= 6) {
+    o.rho = in.f64("rho");
+    if (!(o.rho >= 0.0 && o.rho < 1.0)) in.fail("rho must be in [0, 1)");
+  }
   return o;
 }
 

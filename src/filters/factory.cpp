@@ -25,6 +25,7 @@ using options::formatReal;
 using options::parseBool;
 using options::parseInteger;
 using options::parseLength;
+using options::parseFraction;
 using options::parseSeed;
 
 using Opt = FilterOption;
@@ -38,7 +39,7 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 // here is the one line a flag or a spec error shows.
 void applyProfile(FilterSpec& s, std::string_view v);
 
-const std::array<FilterOption, 19> kOptions = {{
+const std::array<FilterOption, 20> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
      "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=30,motion=deferred "
      "(honest covariances in constant time; README)",
@@ -110,6 +111,11 @@ const std::array<FilterOption, 19> kOptions = {{
      "linearization=invariant: re-anchor an observed landmark whose mean moved more than this [m]",
      [](FilterSpec& s, std::string_view v) { s.seif.reanchor = parseLength("reanchor", v); },
      [](const FilterSpec& s) { return formatReal(s.seif.reanchor); }},
+    {"rho", kSeif, Opt::Kind::Fraction, "", 0, 0,
+     "the journal paper's knob: H and b scaled by 1 - rho at each sparsification (the mean kept, "
+     "the covariance inflated; 0: off)",
+     [](FilterSpec& s, std::string_view v) { s.seif.rho = parseFraction("rho", v); },
+     [](const FilterSpec& s) { return formatReal(s.seif.rho); }},
     {"motion", kSeif, kChoice, "immediate|deferred", 0, 0,
      "when motion enters H: at every control (immediate, the paper) or composed into one "
      "increment at the next observation (deferred: one motion update per scan)",

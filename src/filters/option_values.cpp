@@ -43,6 +43,15 @@ double parseLength(std::string_view key, std::string_view value) {
   return v;
 }
 
+double parseFraction(std::string_view key, std::string_view value) {
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
+  if (ec != std::errc() || end != value.data() + value.size() || !(v >= 0.0 && v < 1.0)) {
+    bad(key, value, "is not a fraction in [0, 1)");
+  }
+  return v;
+}
+
 std::uint64_t parseSeed(std::string_view value) {
   std::uint64_t v = 0;
   const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);

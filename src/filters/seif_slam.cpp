@@ -29,6 +29,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
   if (!(options.reanchor >= 0.0) || !std::isfinite(options.reanchor)) {
     throw InvalidArgument("seif: reanchor must be finite and >= 0");
   }
+  if (!(options.rho >= 0.0 && options.rho < 1.0)) throw InvalidArgument("seif: rho must be in [0, 1)");
   if (options_.covariance == SeifOptions::Covariance::Conservative) options_.bounds = true;
   order_.reserve(kMaxLocalLandmarks + 1);
   bound_slots_.reserve(kMaxLocalLandmarks + 1);
@@ -65,7 +66,7 @@ void SeifSlam::guarded(const Step& step) {
   const std::optional<MotionIncrement> pending = pending_motion_;
   const std::size_t pending_controls = pending_controls_;
   const double information_scale = information_scale_;
-  const std::size_t overclaims = overclaims_;
+  const std::size_t scalings = scalings_;
   store_.beginTransaction();
   try {
     step();
@@ -82,7 +83,7 @@ void SeifSlam::guarded(const Step& step) {
     pending_motion_ = pending;
     pending_controls_ = pending_controls;
     information_scale_ = information_scale;
-    overclaims_ = overclaims;
+    scalings_ = scalings;
     invalidateFactor();
     throw;
   }

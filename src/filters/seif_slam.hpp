@@ -80,12 +80,13 @@ class SeifSlam final : public SlamFilter {
   /// Its lower triangle, what the factorisation reads (SeifStore::lowerInformation).
   Eigen::SparseMatrix<double> lowerInformation() const { return store().lowerInformation() / information_scale_; }
   Eigen::VectorXd informationVector() const { return store().informationVector() / information_scale_; }
-  /// kappa: the store holds kappa H and kappa b (Sparsify::Conservative scales the posterior's
-  /// information down by raising kappa, in O(1): every later step's information enters the
-  /// store times kappa, every covariance leaves it times kappa). 1 with the other rules.
+  /// kappa: the store holds kappa H and kappa b (Sparsify::Conservative and SeifOptions::rho
+  /// scale the posterior's information down by raising kappa, in O(1): every later step's
+  /// information enters the store times kappa, every covariance leaves it times kappa). 1
+  /// without them.
   double informationScale() const { return information_scale_; }
-  /// Sparsifications under Sparsify::Conservative that raised kappa.
-  std::size_t overclaims() const { return overclaims_; }
+  /// Sparsifications that raised kappa (Sparsify::Conservative, SeifOptions::rho).
+  std::size_t informationScalings() const { return scalings_; }
   /// The exact mean H^-1 b (sparse Cholesky), without changing the filter.
   Eigen::VectorXd exactMean() const;
   /// Runs `sweeps` full Gauss-Seidel sweeps of the mean over every variable.
@@ -206,7 +207,7 @@ class SeifSlam final : public SlamFilter {
   std::optional<MotionIncrement> pending_motion_;
   std::size_t pending_controls_ = 0;
   double information_scale_ = 1.0;  // kappa (informationScale())
-  std::size_t overclaims_ = 0;      // Sparsify::Conservative steps that raised kappa
+  std::size_t scalings_ = 0;        // sparsifications that raised kappa
 
   // Work buffers, reused every step (no allocation in the steady state).
   Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxLocalDim> workspace_;

@@ -61,7 +61,7 @@ void SeifSlam::endConservativeSparsification() {
   }
   if (c > 0.0) {
     information_scale_ *= 1.0 + c;  // H / kappa <- H / (kappa (1 + c))
-    ++overclaims_;
+    ++scalings_;
   }
 }
 

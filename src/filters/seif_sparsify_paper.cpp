@@ -50,6 +50,10 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
   store_.scatter();
   invalidateFactor();
   for (int i = 0; i < drop; ++i) store_.removeRobotLink(ranking_[static_cast<std::size_t>(i)].second);
+  if (options_.rho > 0.0) {  // SeifOptions::rho: H <- (1 - rho) H, kept as kappa (informationScale())
+    information_scale_ /= 1.0 - options_.rho;
+    ++scalings_;
+  }
 }
 
 }  // namespace seif

@@ -159,7 +159,7 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
     out.u64(f.pending_controls_);
   }
   out.f64(f.information_scale_);  // Sparsify::Conservative's kappa
-  out.u64(f.overclaims_);
+  out.u64(f.scalings_);
 }
 
 void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
@@ -192,11 +192,11 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
     f.pending_motion_ = m;
   }
   f.information_scale_ = 1.0;
-  f.overclaims_ = 0;
+  f.scalings_ = 0;
   if (in.version() >= 6) {
     f.information_scale_ = in.f64("information scale");
     if (!(f.information_scale_ >= 1.0) || !std::isfinite(f.information_scale_)) in.fail("information scale must be finite and >= 1");
-    f.overclaims_ = static_cast<std::size_t>(in.u64("overclaims"));
+    f.scalings_ = static_cast<std::size_t>(in.u64("information scalings"));
   }
   f.invalidateFactor();
 }

@@ -32,7 +32,7 @@ struct FilterOption {
   /// Length: a finite number >= 0 [m]. Profile: a spec-only shorthand that sets other
   /// options (the keys after it in the spec override it); the canonical spec, the flags and
   /// metrics.json list the options it set, not it.
-  enum class Kind { Choice, Integer, Seed, Length, Profile };
+  enum class Kind { Choice, Integer, Seed, Length, Fraction, Profile };
   std::string_view key;      ///< e.g. "relax-order"
   Scope scope;
   Kind kind;

@@ -85,6 +85,10 @@ struct SeifOptions {
   /// one per control: on Victoria Park (40 Hz odometry, 9 % of the steps with a laser scan)
   /// docs/seif.md measures it.
   Motion motion = Motion::Immediate;
+  /// The journal paper's knob (IJRR 2004, §5.3: H <- (1 - rho) H + rho H0, here H0 = 0): at each
+  /// sparsification H and b are scaled by 1 - rho, the mean kept and the covariance inflated by
+  /// 1 / (1 - rho); O(1) (SeifSlam::informationScale()). In [0, 1); 0: off.
+  double rho = 0.0;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
