@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 
 namespace {
 
@@ -181,6 +182,39 @@ TEST(InformationKnob, RhoScalesTheInformationAtEachSparsification) {
   seif::SeifOptions bad = o;
   bad.rho = 1.0;
   EXPECT_THROW(seif::SeifSlam(s.start, test::configFor(s), bad), seif::InvalidArgument);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(ConservativeSparsification, AStepWhoseRuleClaimsTooMuchIsRefusedAndLeavesTheFilterAsItWas) {
+  // The paper's SEIF with the standard Jacobians and three active landmarks claims so much
+  // that kappa grows without limit (docs/consistency.md): the step that can no longer be
+  // factorised throws a NumericError naming it, and the filter is as it was before the step.
+  const test::Scenario s = test::makeScenario(12, 40, 400);
+  seif::SeifOptions o;
+  o.active = 3;
+  o.sparsify = seif::SeifOptions::Sparsify::Conservative;
+  seif::SeifSlam seif(s.start, test::configFor(s), o);
+  bool refused = false;
+  for (const seif::Step& step : s.steps) {
+    seif.predict(step.u);
+    const Eigen::VectorXd mean = seif.mean();
+    const Eigen::MatrixXd H = seif.information();
+    const double kappa = seif.informationScale();
+    try {
+      seif.update(step.observations);
+    } catch (const seif::NumericError& e) {
+      EXPECT_NE(std::string(e.what()).find("conservative sparsification"), std::string::npos) << e.what();
+      EXPECT_TRUE(seif.mean() == mean);
+      EXPECT_TRUE(seif.information() == H);
+      EXPECT_EQ(seif.informationScale(), kappa);
+      refused = true;
+      break;
+    }
+  }
+  EXPECT_TRUE(refused) << "kappa " << seif.informationScale() << ": the rule was expected to claim too much";
 }
 
 }  // namespace

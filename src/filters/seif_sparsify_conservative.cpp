@@ -15,6 +15,7 @@
 
 #include <seif/core/errors.hpp>
 
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -22,12 +23,18 @@ namespace seif {
 
 namespace {
 
+std::string shortNumber(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", v);
+  return text;
+}
+
 /// When the rule keeps claiming much more than H holds (the standard Jacobians' SEIF with few
 /// active landmarks), kappa grows without limit: every later step's information outweighs
 /// the old by kappa, and H loses the start prior that fixes the global frame.
 [[noreturn]] void rethrowLost(const NumericError& e, long step, double kappa) {
   throw NumericError("seif: conservative sparsification at step " + std::to_string(step) +
-                     " (information scaled down " + std::to_string(kappa) + " times so far): " + e.what() +
+                     " (information scaled down " + shortNumber(kappa) + " times so far): " + e.what() +
                      "; the paper's rule claimed too much to keep: more active landmarks, or "
                      "linearization=invariant (docs/consistency.md)");
 }
@@ -57,7 +64,7 @@ void SeifSlam::endConservativeSparsification() {
   }
   if (!(c < 1e12)) {  // also NaN
     throw NumericError("seif: conservative sparsification at step " + std::to_string(store_.step()) +
-                       ": the rule claims " + std::to_string(c) + " times the information the block held");
+                       ": the rule claims " + shortNumber(c) + " times the information the block held");
   }
   if (c > 0.0) {
     information_scale_ *= 1.0 + c;  // H / kappa <- H / (kappa (1 + c))
