@@ -176,6 +176,9 @@ def test_the_option_table_names_every_option_once():
         owner = owners.get(row["filters"], seif.FilterSpec())
         assert hasattr(owner, row["attribute"]), row
         value = getattr(owner, row["attribute"])
+        if isinstance(value, float):  # a real prints as the table writes it: 0 for 0.0
+            assert value == float(row["default"]), row
+            continue
         text = str(value).lower() if isinstance(value, bool) else str(getattr(value, "text", value))
         assert text == row["default"], row
         if row["choices"]:
