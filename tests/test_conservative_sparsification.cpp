@@ -182,6 +182,9 @@ TEST(InformationKnob, RhoScalesTheInformationAtEachSparsification) {
   seif::SeifOptions bad = o;
   bad.rho = 1.0;
   EXPECT_THROW(seif::SeifSlam(s.start, test::configFor(s), bad), seif::InvalidArgument);
+  bad.rho = 0.1;
+  bad.sparsify = seif::SeifOptions::Sparsify::Eseif;  // its relocalisation adds unscaled information
+  EXPECT_THROW(seif::SeifSlam(s.start, test::configFor(s), bad), seif::InvalidArgument);
 }
 
 }  // namespace

@@ -30,6 +30,9 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
     throw InvalidArgument("seif: reanchor must be finite and >= 0");
   }
   if (!(options.rho >= 0.0 && options.rho < 1.0)) throw InvalidArgument("seif: rho must be in [0, 1)");
+  if (options.rho > 0.0 && options.sparsify == SeifOptions::Sparsify::Eseif) {
+    throw InvalidArgument("seif: rho scales the paper's sparsification; sparsify=eseif conditions nothing away");
+  }
   if (options_.covariance == SeifOptions::Covariance::Conservative) options_.bounds = true;
   order_.reserve(kMaxLocalLandmarks + 1);
   bound_slots_.reserve(kMaxLocalLandmarks + 1);

@@ -87,7 +87,7 @@ struct SeifOptions {
   Motion motion = Motion::Immediate;
   /// The journal paper's knob (IJRR 2004, §5.3: H <- (1 - rho) H + rho H0, here H0 = 0): at each
   /// sparsification H and b are scaled by 1 - rho, the mean kept and the covariance inflated by
-  /// 1 / (1 - rho); O(1) (SeifSlam::informationScale()). In [0, 1); 0: off.
+  /// 1 / (1 - rho); O(1) (SeifSlam::informationScale()). In [0, 1); 0: off. Not with Eseif.
   double rho = 0.0;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
