@@ -285,3 +285,16 @@ def test_the_association_ceiling_from_python():
     log = seif.simulate(seif.preset_config("park", 0, 50, 1))
     log.groundtruth = []
     assert seif.association_ceiling(seif.RobotLogSource(log, seif.NoiseModel()), seif.RangeBearingModel(0.5, 0.03)) is None
+
+
+@pytest.mark.parametrize("spec", ["seif:rho=0.05", "seif:profile=consistent,active=20,sparsify=conservative"])
+def test_seif_information_scale_reaches_python(paper_world, spec):
+    """rho and sparsify=conservative keep the store's information times kappa
+    (information_scale): the covariances Python reads are the inverse of the information it reads."""
+    data, world = paper_world
+    f = seif.make_filter(spec, seif.start_pose(data), paper_config(world))
+    seif.run_filter(f, data)
+    assert f.information_scale > 1.0
+    assert f.information_scalings > 0
+    P = np.linalg.inv(f.information().toarray())
+    np.testing.assert_allclose(f.pose_covariance(), P[:3, :3], rtol=1e-6, atol=1e-12)
