@@ -147,10 +147,6 @@ TEST(ConservativeSparsification, CovariancesAreTheScaledPosteriors) {
   EXPECT_LT((b - seif.information() * seif.exactMean()).norm(), 1e-8 * b.norm());
 }
 
-}  // namespace
-
-namespace {
-
 TEST(InformationKnob, RhoScalesTheInformationAtEachSparsification) {
   // SeifOptions::rho (IJRR 2004 §5.3, H <- (1 - rho) H): kappa = (1 - rho)^-n after n
   // sparsifications, the reported covariance the inverse of the reported information; rho = 0
@@ -186,10 +182,6 @@ TEST(InformationKnob, RhoScalesTheInformationAtEachSparsification) {
   bad.sparsify = seif::SeifOptions::Sparsify::Eseif;  // its relocalisation adds unscaled information
   EXPECT_THROW(seif::SeifSlam(s.start, test::configFor(s), bad), seif::InvalidArgument);
 }
-
-}  // namespace
-
-namespace {
 
 TEST(ConservativeSparsification, AStepWhoseRuleClaimsTooMuchIsRefusedAndLeavesTheFilterAsItWas) {
   // The paper's SEIF with the standard Jacobians and three active landmarks claims so much

@@ -406,16 +406,18 @@ Vec2 SeifSlam::landmark(int id) const { return store_.node(book_.require(id)).mu
 // H stores every robot and landmark diagonal block in full, so each lies in its pattern.
 // Each covariance read from the store (kappa H) is multiplied by kappa (informationScale()).
 Mat3 SeifSlam::poseCovariance() const {
-  if (options_.covariance == SeifOptions::Covariance::Local) return information_scale_ * localCovariance({-1});
-  if (options_.covariance == SeifOptions::Covariance::Conservative) return information_scale_ * localCovariance({-1}, true);
-  return information_scale_ * factor().covarianceBlock<3>(0);
+  const bool local = options_.covariance != SeifOptions::Covariance::Exact;
+  const Mat3 stored = local ? Mat3(localCovariance({-1}, options_.covariance == SeifOptions::Covariance::Conservative))
+                            : factor().covarianceBlock<3>(0);
+  return information_scale_ * stored;
 }
 
 Mat2 SeifSlam::landmarkCovariance(int id) const {
   const int slot = book_.require(id);
-  if (options_.covariance == SeifOptions::Covariance::Local) return information_scale_ * localCovariance({slot});
-  if (options_.covariance == SeifOptions::Covariance::Conservative) return information_scale_ * localCovariance({slot}, true);
-  return information_scale_ * factor().covarianceBlock<2>(StateLayout::landmark(slot));
+  const bool local = options_.covariance != SeifOptions::Covariance::Exact;
+  const Mat2 stored = local ? Mat2(localCovariance({slot}, options_.covariance == SeifOptions::Covariance::Conservative))
+                            : factor().covarianceBlock<2>(StateLayout::landmark(slot));
+  return information_scale_ * stored;
 }
 
 Eigen::MatrixXd SeifSlam::localCovariance(std::initializer_list<int> vars, bool conservative) const {
