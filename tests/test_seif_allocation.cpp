@@ -171,6 +171,16 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsWithCovarianceBounds) {
   expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
 }
 
+TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsWithRho) {
+  // SeifOptions::rho scales the information by the one number kappa (informationScale()):
+  // nothing in the store is rewritten, and nothing is allocated for it.
+  seif::SeifOptions options;
+  options.rho = 0.001;
+  expectNoHeapAllocationInSteadyStateSteps(options);
+  options.active = 12;
+  expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
+}
+
 // Every marginal of a state comes from one factorisation: the first read factors H and
 // computes the selected inverse's columns it needs, later reads compute the rest of their
 // paths, and no read builds an N-row matrix (the landed getter solved with a dense
