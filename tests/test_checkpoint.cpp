@@ -152,7 +152,8 @@ INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
                                            "seif:sparsify=eseif,covariance=conservative",
                                            "seif:motion=deferred",
                                            "seif:profile=consistent,active=20,sparsify=conservative",
-                                           "seif:profile=consistent,motion=deferred,bounds=true"));
+                                           "seif:profile=consistent,motion=deferred,bounds=true",
+                                           "seif:linearization=invariant,gauge=kept,active=4"));
 
 TEST(Checkpoint, RandomOrderDependsOnTheSavedEngine) {
   // The resume test can fail: the same checkpoint with the random engine restarted from

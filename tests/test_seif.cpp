@@ -11,9 +11,11 @@
 #include <seif/filters/factory.hpp>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <random>
 
 namespace {
@@ -32,6 +34,20 @@ double landmarkRmse(const SlamFilter& f, const test::Scenario& s) {
     sum += (f.landmark(id) - s.landmarks[static_cast<std::size_t>(id - 100)]).squaredNorm();
   }
   return std::sqrt(sum / static_cast<double>(f.landmarkIds().size()));
+}
+
+/// The free directions of a block [x, Y+, Y0] at random positions: translations and the rotation.
+Eigen::MatrixXd randomGauge(int n, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> pos(-10.0, 10.0);
+  Eigen::MatrixXd V = Eigen::MatrixXd::Zero(n, 3);
+  for (int i = 0; i < n; i += (i == 0 ? 3 : 2)) {
+    const double px = pos(rng), py = pos(rng);
+    V.block(i, 0, 2, 2).setIdentity();
+    V(i, 2) = -py;
+    V(i + 1, 2) = px;
+  }
+  V(2, 2) = 1.0;
+  return V;
 }
 
 }  // namespace
@@ -82,6 +98,76 @@ TEST(Sparsification, ZeroesTheRobotLinksAndKeepsTheMeanOnRandomBlocks) {
     ASSERT_EQ(llt.info(), Eigen::Success) << "sparsified H is not positive definite";
     EXPECT_LT(relDiff(llt.solve(bs), mu), 1e-9);
     EXPECT_LT((Hs - Hs.transpose()).cwiseAbs().maxCoeff(), 1e-12 * H.cwiseAbs().maxCoeff());
+  }
+}
+
+TEST(Sparsification, WithTheGaugeKeptItClaimsNothingOnTheFreeDirections) {
+  // Random blocks whose free directions V (translations and rotation of robot and map
+  // together) carry no information (H V = 0) or only a prior's. The paper's rule claims
+  // information on them; with the gauge kept, V^T (Hs - H) V <= 0, so Hs V = 0 when H V = 0,
+  // and still: the robot-Y0 links zero, the mean kept, Hs positive (semi)definite.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n01;
+  double paper_claims = 0.0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int keep = 2 + trial % 5, drop = 1 + trial % 3;
+    const bool free = trial % 2 == 0;
+    const int n = 3 + 2 * (keep + drop);
+    const Eigen::MatrixXd V = randomGauge(n, rng);
+    const Eigen::MatrixXd P = Eigen::MatrixXd::Identity(n, n) - V * (V.transpose() * V).ldlt().solve(V.transpose());
+    Eigen::MatrixXd A(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) A(i, j) = n01(rng);
+    Eigen::MatrixXd H = P * (A * A.transpose() + n * Eigen::MatrixXd::Identity(n, n)) * P;
+    if (!free) H += 1e-2 * Eigen::MatrixXd::Identity(n, n);  // a prior on everything
+    H = (0.5 * (H + H.transpose())).eval();
+    Eigen::VectorXd mu(n);
+    for (int i = 0; i < n; ++i) mu(i) = n01(rng);
+    const Eigen::VectorXd b = H * mu;
+    const double scale = H.cwiseAbs().maxCoeff();
+    Eigen::MatrixXd Hp = H, Hs = H;
+    Eigen::VectorXd bp = b, bs = b;
+    sparsifyInformation(Hp, bp, mu, drop);
+    sparsifyInformation(Hs, bs, mu, drop, V);
+    paper_claims = std::max(paper_claims, (V.transpose() * (Hp - H) * V).eigenvalues().real().maxCoeff() / scale);
+    const Eigen::MatrixXd claim = V.transpose() * (Hs - H) * V;
+    EXPECT_LT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(0.5 * (claim + claim.transpose())).eigenvalues().maxCoeff(),
+              1e-9 * scale) << "trial " << trial;
+    if (free) {
+      EXPECT_LT((Hs * V).cwiseAbs().maxCoeff(), 1e-9 * scale) << "trial " << trial;
+    }
+    EXPECT_LT(Hs.block(0, n - 2 * drop, 3, 2 * drop).cwiseAbs().maxCoeff(), 1e-12 * scale);
+    EXPECT_LT((bs - Hs * mu - (b - H * mu)).cwiseAbs().maxCoeff(), 1e-9 * scale * mu.cwiseAbs().maxCoeff());
+    EXPECT_LT((Hs - Hs.transpose()).cwiseAbs().maxCoeff(), 1e-12 * scale);
+    const Eigen::VectorXd eig = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Hs).eigenvalues();
+    EXPECT_GT(eig.minCoeff(), free ? -1e-9 * scale : 0.0) << "trial " << trial;
+    // Only the robot's links to Y+ and the Y+ block change beyond the paper's rule.
+    EXPECT_LT((Hs - Hp).bottomRows(2 * drop).cwiseAbs().maxCoeff(), 1e-12 * scale);
+    EXPECT_LT((Hs - Hp).topLeftCorner(3, 3).cwiseAbs().maxCoeff(), 1e-12 * scale);
+  }
+  std::printf("largest information the paper's rule claimed on the free directions: %.3g of the block's scale\n",
+              paper_claims);
+  EXPECT_GT(paper_claims, 1e-4);
+}
+
+TEST(Sparsification, WithOneLandmarkKeptTheTranslationsAreKept) {
+  // One landmark in Y+ cannot carry a rotation: the rule keeps what it can, the translations.
+  std::mt19937_64 rng(6);
+  std::normal_distribution<double> n01;
+  for (int trial = 0; trial < 50; ++trial) {
+    const int drop = 1 + trial % 3, n = 3 + 2 * (1 + drop);
+    const Eigen::MatrixXd V = randomGauge(n, rng);
+    const Eigen::MatrixXd T = V.leftCols(2);
+    const Eigen::MatrixXd P = Eigen::MatrixXd::Identity(n, n) - T * (T.transpose() * T).ldlt().solve(T.transpose());
+    Eigen::MatrixXd A(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) A(i, j) = n01(rng);
+    Eigen::MatrixXd H = P * (A * A.transpose() + n * Eigen::MatrixXd::Identity(n, n)) * P;
+    H = (0.5 * (H + H.transpose())).eval();
+    const Eigen::VectorXd mu = Eigen::VectorXd::Ones(n);
+    Eigen::VectorXd b = H * mu;
+    sparsifyInformation(H, b, mu, drop, V);
+    EXPECT_LT((H * T).cwiseAbs().maxCoeff(), 1e-9 * H.cwiseAbs().maxCoeff()) << "trial " << trial;
   }
 }
 
@@ -221,6 +307,12 @@ TEST(Seif, OptionsAreValidated) {
   EXPECT_THROW(SeifOptions::parseDeactivate("random"), seif::InvalidArgument);
   EXPECT_EQ(SeifOptions::parseRecovery("after-update"), SeifOptions::Recovery::AfterMeasurement);
   EXPECT_THROW(SeifOptions::parseRecovery("sometimes"), seif::InvalidArgument);
+  EXPECT_EQ(SeifOptions::parseGauge("kept"), SeifOptions::Gauge::Kept);
+  EXPECT_THROW(SeifOptions::parseGauge("free"), seif::InvalidArgument);
+  o.relax = 10;
+  o.gauge = SeifOptions::Gauge::Kept;
+  o.sparsify = SeifOptions::Sparsify::Conservative;
+  EXPECT_THROW(SeifSlam(Pose2::Zero(), paperFilterConfig(NoiseModel{}), o), seif::InvalidArgument);
 }
 
 TEST(InformationMotionUpdate, IsTheLinearisedPredictionForAnyLinearisationPoint) {

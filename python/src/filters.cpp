@@ -60,6 +60,9 @@ void bindSeifOptions(py::module_& m) {
                                      &nameOf<SeifOptions::Motion>)
       .value("Immediate", SeifOptions::Motion::Immediate)
       .value("Deferred", SeifOptions::Motion::Deferred);
+  bindNamedEnum<SeifOptions::Gauge>(o, "Gauge", "'paper' | 'kept'", &SeifOptions::parseGauge, &nameOf<SeifOptions::Gauge>)
+      .value("Paper", SeifOptions::Gauge::Paper)
+      .value("Kept", SeifOptions::Gauge::Kept);
   o.def(py::init<>())
       .def_readwrite("active", &SeifOptions::active, "theta_x: landmarks linked to the robot after each step")
       .def_readwrite("relax", &SeifOptions::relax, "K: landmarks relaxed per step besides the robot and the active ones")
@@ -81,9 +84,12 @@ void bindSeifOptions(py::module_& m) {
                      "keep an upper bound on every landmark's covariance (MarginalMode.Conservative)")
       .def_readwrite("rho", &SeifOptions::rho,
                      "the journal paper's knob: H and b scaled by 1 - rho at each sparsification (0: off)")
+      .def_readwrite("gauge", &SeifOptions::gauge,
+                     "paper (eq. 44-51 as published) or kept: the sparsification claims no information on the "
+                     "directions the posterior leaves free")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho"});
+                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho", "gauge"});
       });
 }
 

@@ -80,6 +80,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.u64(o.bounds ? 1 : 0);
   out.u64(static_cast<std::uint64_t>(o.motion));
   out.f64(o.rho);
+  out.u64(static_cast<std::uint64_t>(o.gauge));
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -108,6 +109,7 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
     o.rho = in.f64("rho");
     if (!(o.rho >= 0.0 && o.rho < 1.0)) in.fail("rho must be in [0, 1)");
   }
+  if (in.version() >= 7) o.gauge = static_cast<SeifOptions::Gauge>(in.u64Max("gauge", 1));
   return o;
 }
 

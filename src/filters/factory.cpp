@@ -39,7 +39,7 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 // here is the one line a flag or a spec error shows.
 void applyProfile(FilterSpec& s, std::string_view v);
 
-const std::array<FilterOption, 20> kOptions = {{
+const std::array<FilterOption, 21> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
      "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=30,motion=deferred "
      "(honest covariances in constant time; README)",
@@ -116,6 +116,11 @@ const std::array<FilterOption, 20> kOptions = {{
      "the covariance inflated; 0: off)",
      [](FilterSpec& s, std::string_view v) { s.seif.rho = parseFraction("rho", v); },
      [](const FilterSpec& s) { return formatReal(s.seif.rho); }},
+    {"gauge", kSeif, kChoice, "paper|kept", 0, 0,
+     "sparsification on the directions the posterior leaves free (the map moved or turned with "
+     "the robot): the paper's rule claims information on them (paper), or none (kept)",
+     [](FilterSpec& s, std::string_view v) { s.seif.gauge = SeifOptions::parseGauge(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.seif.gauge)); }},
     {"motion", kSeif, kChoice, "immediate|deferred", 0, 0,
      "when motion enters H: at every control (immediate, the paper) or composed into one "
      "increment at the next observation (deferred: one motion update per scan)",

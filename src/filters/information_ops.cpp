@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <queue>
 #include <string>
@@ -73,8 +74,61 @@ void informationMotionUpdate(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Ve
   b.noalias() += H * mu;
 }
 
+namespace {
+
+/// The gauge-keeping correction of a sparsification's change (information_ops.hpp): H0 + change
+/// is the paper's result, [C U 0] its robot rows. Written as the marginal of the landmarks times
+/// the robot's conditional, that conditional's residual is x - m(Y+) with
+/// m(Y+) = -C^-1 U Y+; the exact one's is A z with A = H_xx^-1 [H_xx, H_xY]. Replacing U by
+/// U + D with D V_+ = C H_xx^-1 (H0 V)_x - C V_x - U V_+ gives the new residual A V on the gauge
+/// directions V, so V^T (Hs - H0) V = (A V)^T (C - H_xx) (A V) <= 0: the rule claims nothing
+/// on them (for a gauge H0 leaves free, H0 V = 0, Hs V = 0). D is the least such change; a
+/// direction V_+ cannot carry (one landmark in Y+ cannot carry a rotation) is left as the
+/// paper's rule leaves it.
+void keepGauge(const LocalMatrix& H0, LocalMatrix& change, const Eigen::Ref<const Eigen::MatrixXd>& gauge,
+               Eigen::Index d) {
+  using Rows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim>;
+  const Eigen::Index n = H0.rows(), p = n - 3 - d;
+  if (p < 2) return;
+  // Columns made orthogonal over Y+ in their order (the translations first), so that a
+  // direction Y+ cannot carry (a rotation with one landmark kept) drops out alone.
+  LocalGauge V = gauge;
+  std::array<bool, 3> carried{};
+  for (Eigen::Index j = 0; j < V.cols(); ++j) {
+    const double before = V.col(j).segment(3, p).squaredNorm();
+    for (Eigen::Index i = 0; i < j; ++i) {
+      if (carried[static_cast<std::size_t>(i)]) {
+        V.col(j) -= V.col(i).segment(3, p).dot(V.col(j).segment(3, p)) / V.col(i).segment(3, p).squaredNorm() * V.col(i);
+      }
+    }
+    carried[static_cast<std::size_t>(j)] = V.col(j).segment(3, p).squaredNorm() > 1e-12 * before;
+  }
+  const Mat3 C = H0.topLeftCorner<3, 3>() + change.topLeftCorner<3, 3>();
+  const Rows3 U = H0.block(0, 3, 3, p) + change.block(0, 3, 3, p);
+  const Eigen::LLT<Mat3> llt_c(C), llt_x(H0.topLeftCorner<3, 3>());
+  if (llt_c.info() != Eigen::Success || llt_x.info() != Eigen::Success) {
+    throw NumericError("sparsification: the robot's information is not positive definite");
+  }
+  const Rows3 HV_x = H0.topRows(3) * V;
+  const Rows3 delta = C * llt_x.solve(HV_x) - C * V.topRows(3) - U * V.middleRows(3, p);
+  Rows3 D = Rows3::Zero(3, p);  // D V_+ = delta on the carried columns (orthogonal: one at a time)
+  for (Eigen::Index j = 0; j < V.cols(); ++j) {
+    if (!carried[static_cast<std::size_t>(j)]) continue;
+    const auto v = V.col(j).segment(3, p);
+    D.noalias() += delta.col(j) * v.transpose() / v.squaredNorm();
+  }
+  const Rows3 UD = U + D;
+  change.block(0, 3, 3, p) += D;
+  change.block(3, 0, p, 3) += D.transpose();
+  change.block(3, 3, p, p).noalias() += UD.transpose() * llt_c.solve(UD);
+  change.block(3, 3, p, p).noalias() -= U.transpose() * llt_c.solve(U);
+}
+
+}  // namespace
+
 double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
-                           const Eigen::Ref<const Eigen::VectorXd>& mu, int drop) {
+                           const Eigen::Ref<const Eigen::VectorXd>& mu, int drop,
+                           const Eigen::Ref<const Eigen::MatrixXd>& gauge) {
   const Eigen::Index n = H.rows();
   const Eigen::Index d = 2 * drop;        // size of Y0
   const Eigen::Index y0 = n - d;          // first row of Y0
@@ -104,6 +158,7 @@ double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Vect
   change.noalias() -= H0.rightCols(d) * llt_y0.solve(H0.bottomRows(d));
   change.noalias() -= H0.leftCols(3) * llt_x.solve(H0.topRows(3));
   change = (0.5 * (change + change.transpose())).eval();
+  if (gauge.cols() > 0) keepGauge(H0, change, gauge, d);
   H += change;
   b.noalias() += change * mu;
   const double scale = H0.cwiseAbs().maxCoeff();

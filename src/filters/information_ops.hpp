@@ -50,8 +50,13 @@ using LocalVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kM
 /// Returns the largest magnitude the formula left in the robot-Y0 blocks (zero up to
 /// rounding; the caller removes those links), relative to the largest entry of the block.
 /// At most kMaxLocalDim rows; allocates nothing. Throws NumericError if a block is singular.
+/// With `gauge` (the block's rows of the directions the posterior leaves free: translations,
+/// rotation; columns), the robot's new links to Y+ are corrected so that the result claims no
+/// information along them that H did not hold (docs/consistency.md, "The gauge").
 double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::VectorXd> b,
-                           const Eigen::Ref<const Eigen::VectorXd>& mu, int drop);
+                           const Eigen::Ref<const Eigen::VectorXd>& mu, int drop,
+                           const Eigen::Ref<const Eigen::MatrixXd>& gauge = Eigen::MatrixXd());
+using LocalGauge = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMaxLocalDim, 3>;
 
 /// The least c >= 0 with E <= c Sigma^-1 in the Loewner order: the largest eigenvalue of
 /// L^T E L (Sigma = L L^T), or 0 when E claims nothing. For E = H~ - H, the change a

@@ -33,6 +33,12 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
   if (options.rho > 0.0 && options.sparsify == SeifOptions::Sparsify::Eseif) {
     throw InvalidArgument("seif: rho scales the paper's sparsification; sparsify=eseif conditions nothing away");
   }
+  if (options.gauge == SeifOptions::Gauge::Kept && options.sparsify == SeifOptions::Sparsify::Conservative) {
+    // The correction moves the robot's information on Y0 onto Y+; measured against the block's
+    // local covariance that reads as a large claim, and the scale ran away (10^14 in 100 steps).
+    throw InvalidArgument("seif: gauge=kept does not combine with sparsify=conservative (its scale runs away); "
+                          "use one of them");
+  }
   if (options_.covariance == SeifOptions::Covariance::Conservative) options_.bounds = true;
   order_.reserve(kMaxLocalLandmarks + 1);
   bound_slots_.reserve(kMaxLocalLandmarks + 1);

@@ -155,6 +155,8 @@ class SeifSlam final : public SlamFilter {
   /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).
   /// With `slot` >= 0 (an active landmark), deactivates that landmark alone.
   void deactivateSurplus(bool solve_active_mean_first, int slot = -1);
+  /// Gauge::Kept: the free directions of the block deactivateSurplus() gathered (gauge_).
+  void gatherGauge(int drop);
   /// update() with Sparsify::Eseif (Walter, Eustice, Leonard 2007).
   void eseifUpdate(std::span<const Observation> z, const MeasurementModel& sensor);
   /// Whether z would leave more than options.active landmarks active.
@@ -226,6 +228,7 @@ class SeifSlam final : public SlamFilter {
   LocalMatrix bound_added_;
   Eigen::MatrixXd overclaim_sigma_;  // Sparsify::Conservative: the block's marginal before
   LocalMatrix overclaim_h_;          // and its information before eq. (44-51)
+  LocalGauge gauge_;                 // the block's free directions (keepGauge)
   BoundWorkspace bound_ws_;
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
 

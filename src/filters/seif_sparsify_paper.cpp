@@ -2,6 +2,8 @@
 // 44-51): the surplus of active landmarks is conditioned away. One file per sparsifier:
 // this one, seif_sparsify_eseif.cpp and seif_sparsify_conservative.cpp (this rule with the
 // information scaled down after it); SeifSlam::update chooses by SeifOptions::sparsify.
+// With SeifOptions::gauge = Kept the rule claims nothing on the posterior's free directions
+// (information_ops.hpp, keepGauge).
 #include "filters/seif_slam.hpp"
 
 #include <algorithm>
@@ -41,7 +43,12 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
   if (solve_active_mean_first) store_.solveLocalMean();
   LocalMatrix& H = store_.localH();
   if (conservative) overclaim_h_ = H;
-  const double residual = sparsifyInformation(H, store_.localB(), store_.localMean(), drop);
+  if (options_.gauge == SeifOptions::Gauge::Kept) {
+    gatherGauge(drop);
+  } else {
+    gauge_.resize(H.rows(), 0);  // none: eq. (44-51) as published
+  }
+  const double residual = sparsifyInformation(H, store_.localB(), store_.localMean(), drop, gauge_);
   last_sparsification_residual_ = std::max(last_sparsification_residual_, residual);
   const Eigen::Index y0 = H.rows() - 2 * drop;
   H.block(0, y0, 3, 2 * drop).setZero();
@@ -54,6 +61,30 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
     information_scale_ /= 1.0 - options_.rho;
     ++scalings_;
   }
+}
+
+void SeifSlam::gatherGauge(int drop) {
+  // The free directions over the gathered block [x, Y+, Y0]: the two translations and the
+  // rotation, at the anchors H holds (invariant linearisation: H's own null space, exactly)
+  // or at the means; the rotation about the centre of Y+ (better conditioned, same span).
+  const bool anchored = config_.linearization == Linearization::Invariant;
+  const LocalVector& mu = store_.localMean();
+  const auto at = [&](Eigen::Index row) -> Vec2 {
+    if (row == 0) return anchored ? store_.robotAnchor() : Vec2(mu.head<2>());
+    const int s = store_.gathered()[static_cast<std::size_t>((row - 3) / 2)];
+    return anchored ? store_.node(s).anchor : Vec2(mu.segment<2>(row));
+  };
+  const Eigen::Index n = store_.localH().rows(), y0 = n - 2 * drop;
+  Vec2 centre = Vec2::Zero();
+  for (Eigen::Index i = 3; i < y0; i += 2) centre += at(i);
+  if (y0 > 3) centre /= static_cast<double>((y0 - 3) / 2);
+  gauge_.setZero(n, 3);
+  for (Eigen::Index i = 0; i < n; i += (i == 0 ? 3 : 2)) {
+    gauge_.block<2, 2>(i, 0).setIdentity();
+    const Vec2 r = at(i) - centre;
+    gauge_.block<2, 1>(i, 2) = Vec2(-r.y(), r.x());  // J r
+  }
+  gauge_(2, 2) = 1.0;
 }
 
 }  // namespace seif

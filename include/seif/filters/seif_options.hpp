@@ -14,6 +14,7 @@ struct SeifOptions {
   enum class Sparsify { Seif, Eseif, Conservative };
   enum class Covariance { Exact, Local, Conservative };
   enum class Motion { Immediate, Deferred };
+  enum class Gauge { Paper, Kept };
 
   int active = 6;  ///< theta_x (the paper's name): landmarks linked to the robot after each step
   int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
@@ -89,6 +90,14 @@ struct SeifOptions {
   /// sparsification H and b are scaled by 1 - rho, the mean kept and the covariance inflated by
   /// 1 / (1 - rho); O(1) (SeifSlam::informationScale()). In [0, 1); 0: off. Not with Eseif.
   double rho = 0.0;
+  /// What a sparsification (Seif, Conservative) does to the directions the posterior leaves
+  /// free - the map and robot translated or rotated together, at the anchors of the invariant
+  /// linearisation or at the means. Paper: eq. (44-51) as published; it holds the deactivated
+  /// landmarks fixed in the world and so claims information on them (4 orders of magnitude
+  /// more than the prior on the translation on the paper's world). Kept: the robot's new
+  /// links to the landmarks it keeps are corrected so that the result claims none
+  /// (docs/consistency.md, "The gauge"); O(1).
+  Gauge gauge = Gauge::Paper;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
@@ -97,6 +106,7 @@ struct SeifOptions {
   static Sparsify parseSparsify(std::string_view s);      ///< "seif" | "eseif" | "conservative"
   static Covariance parseCovariance(std::string_view s);  ///< "exact" | "local" | "conservative"
   static Motion parseMotion(std::string_view s);          ///< "immediate" | "deferred"
+  static Gauge parseGauge(std::string_view s);            ///< "paper" | "kept"
 };
 
 /// The name parse*() takes for each value, as specs, flags and metrics.json spell it.
@@ -107,5 +117,6 @@ std::string_view optionName(SeifOptions::RelaxOrder v);
 std::string_view optionName(SeifOptions::Sparsify v);
 std::string_view optionName(SeifOptions::Covariance v);
 std::string_view optionName(SeifOptions::Motion v);
+std::string_view optionName(SeifOptions::Gauge v);
 
 }  // namespace seif
