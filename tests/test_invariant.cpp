@@ -271,16 +271,18 @@ TEST(Invariant, TheSeifWithoutSparsificationIsTheEifWithLocalAnchors) {
 }
 
 TEST(Invariant, TheSeifKeepsTheGlobalRotationUnobservable) {
-  // The anchored H holds no more information on the rotation than the prior gave (0.01),
-  // but for the paper's sparsification at the amortised mean: its conditioning invents a
-  // little (Eustice, Walter, Leonard 2005), still 1000x less than the standard SEIF's. (The
-  // ESEIF with the amortised mean is left out: with a 10 m / 10 rad prior the map's rotation
-  // is almost free, and the relaxed mean drifts along it by kilometres.)
+  // The anchored H holds no more information on the rotation than the prior gave (0.01).
+  // With few active landmarks, the sparsification keeps the gauge (gauge=kept): the paper's
+  // rule claims information on the frame, and under this 10 m / 10 rad prior its mean wanders
+  // off the map - how far, and whether H stays positive definite, depended on the compiler's
+  // rounding (docs/consistency.md, "The gauge"). (The ESEIF with the amortised mean is left
+  // out: with this prior the map's rotation is almost free, and the relaxed mean drifts along
+  // it by kilometres.)
   const double standard = rotationInformation("seif:active=39,mean=exact");
-  const std::pair<const char*, double> cases[] = {{"seif:linearization=invariant,active=39,mean=exact", 0.011},
-                                                  {"seif:linearization=invariant,active=4,mean=exact", 0.011},
-                                                  {"seif:linearization=invariant,active=4", 0.06},
-                                                  {"seif:linearization=invariant,sparsify=eseif,mean=exact", 0.011}};
+  const std::pair<const char*, double> cases[] = {
+      {"seif:linearization=invariant,active=39,mean=exact", 0.011},
+      {"seif:linearization=invariant,active=4,mean=exact,gauge=kept", 0.011},
+      {"seif:linearization=invariant,sparsify=eseif,mean=exact", 0.011}};
   for (const auto& [spec, bound] : cases) {
     const double inv = rotationInformation(spec);
     std::printf("%s: information on the global rotation %.4g (standard %.4g)\n", spec, inv, standard);
@@ -288,11 +290,11 @@ TEST(Invariant, TheSeifKeepsTheGlobalRotationUnobservable) {
     EXPECT_GT(standard, 1000.0 * inv) << spec;
   }
   // Deferred motion (controls held between observations; one step in three observed): as
-  // little information on the rotation as the same filter with immediate motion. (With the
-  // amortised mean a slow sensor gives the paper's sparsification more to invent: 0.15.)
+  // little information on the rotation as the same filter with immediate motion.
   const double standard_slow = rotationInformation("seif:active=39,mean=exact", 3);
-  for (const char* spec : {"seif:linearization=invariant,active=39,mean=exact", "seif:linearization=invariant,active=4,mean=exact",
-                           "seif:linearization=invariant,active=4", "seif:profile=consistent,mean=exact"}) {
+  for (const char* spec : {"seif:linearization=invariant,active=39,mean=exact",
+                           "seif:linearization=invariant,active=4,mean=exact,gauge=kept",
+                           "seif:linearization=invariant,active=4,gauge=kept", "seif:profile=consistent,mean=exact"}) {
     const double immediate = rotationInformation(spec, 3);
     const double deferred = rotationInformation(std::string(spec) + ",motion=deferred", 3);
     std::printf("%s, one step in three observed: information on the global rotation %.4g, deferred motion %.4g "
