@@ -298,3 +298,30 @@ def test_seif_information_scale_reaches_python(paper_world, spec):
     assert f.information_scalings > 0
     P = np.linalg.inv(f.information().toarray())
     np.testing.assert_allclose(f.pose_covariance(), P[:3, :3], rtol=1e-6, atol=1e-12)
+
+
+def test_seif_gauge_reaches_python(paper_world):
+    """gauge=kept, set from a spec or on SeifOptions: the sparsified SEIF holds no more
+    information on the map's common translation than the unsparsified one (docs/consistency.md,
+    "The gauge"), while the paper's rule claims some."""
+    data, world = paper_world
+    options = seif.SeifOptions()
+    options.gauge = "kept"
+    assert options.gauge == seif.SeifOptions.Gauge.Kept
+    assert "gauge" in repr(options)
+
+    def translation_information(spec):
+        f = seif.make_filter(spec, seif.start_pose(data), paper_config(world))
+        seif.run_filter(f, data)
+        H = f.information().toarray()
+        t = np.zeros(H.shape[0])
+        t[0] = 1.0
+        t[3::2] = 1.0
+        t /= np.linalg.norm(t)
+        return t @ H @ t
+
+    reference = translation_information("seif:active=39,mean=exact")
+    kept = translation_information("seif:active=4,mean=exact,gauge=kept")
+    paper = translation_information("seif:active=4,mean=exact")
+    assert kept < 1.01 * reference
+    assert paper > 10.0 * reference
