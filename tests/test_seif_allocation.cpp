@@ -181,6 +181,16 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsWithRho) {
   expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
 }
 
+TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsWithTheGaugeKept) {
+  // SeifOptions::gauge = Kept corrects each sparsification on the gathered block, in
+  // fixed-capacity matrices: standard, and invariant iterated with 12 active.
+  seif::SeifOptions options;
+  options.gauge = seif::SeifOptions::Gauge::Kept;
+  expectNoHeapAllocationInSteadyStateSteps(options);
+  options.active = 12;
+  expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
+}
+
 // Every marginal of a state comes from one factorisation: the first read factors H and
 // computes the selected inverse's columns it needs, later reads compute the rest of their
 // paths, and no read builds an N-row matrix (the landed getter solved with a dense
