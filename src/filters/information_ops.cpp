@@ -85,8 +85,8 @@ namespace {
 /// on them (for a gauge H0 leaves free, H0 V = 0, Hs V = 0). D is the least such change; a
 /// direction V_+ cannot carry (one landmark in Y+ cannot carry a rotation) is left as the
 /// paper's rule leaves it.
-void keepGauge(const LocalMatrix& H0, LocalMatrix& change, const Eigen::Ref<const Eigen::MatrixXd>& gauge,
-               Eigen::Index d) {
+void keepGauge(const LocalMatrix& H0, const Eigen::LLT<Mat3>& llt_x, LocalMatrix& change,
+               const Eigen::Ref<const Eigen::MatrixXd>& gauge, Eigen::Index d) {
   using Rows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim>;
   const Eigen::Index n = H0.rows(), p = n - 3 - d;
   if (p < 2) return;
@@ -105,8 +105,8 @@ void keepGauge(const LocalMatrix& H0, LocalMatrix& change, const Eigen::Ref<cons
   }
   const Mat3 C = H0.topLeftCorner<3, 3>() + change.topLeftCorner<3, 3>();
   const Rows3 U = H0.block(0, 3, 3, p) + change.block(0, 3, 3, p);
-  const Eigen::LLT<Mat3> llt_c(C), llt_x(H0.topLeftCorner<3, 3>());
-  if (llt_c.info() != Eigen::Success || llt_x.info() != Eigen::Success) {
+  const Eigen::LLT<Mat3> llt_c(C);
+  if (llt_c.info() != Eigen::Success) {
     throw NumericError("sparsification: the robot's information is not positive definite");
   }
   const Rows3 HV_x = H0.topRows(3) * V;
@@ -158,7 +158,7 @@ double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Vect
   change.noalias() -= H0.rightCols(d) * llt_y0.solve(H0.bottomRows(d));
   change.noalias() -= H0.leftCols(3) * llt_x.solve(H0.topRows(3));
   change = (0.5 * (change + change.transpose())).eval();
-  if (gauge.cols() > 0) keepGauge(H0, change, gauge, d);
+  if (gauge.cols() > 0) keepGauge(H0, llt_x, change, gauge, d);
   H += change;
   b.noalias() += change * mu;
   const double scale = H0.cwiseAbs().maxCoeff();
