@@ -153,7 +153,8 @@ INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
                                            "seif:motion=deferred",
                                            "seif:profile=consistent,active=20,sparsify=conservative",
                                            "seif:profile=consistent,motion=deferred,bounds=true",
-                                           "seif:linearization=invariant,gauge=kept,active=4"));
+                                           "seif:linearization=invariant,gauge=kept,active=4",
+                                           "seif:linearization=invariant,gauge=kept,active=4,coarse=rigid"));
 
 TEST(Checkpoint, RandomOrderDependsOnTheSavedEngine) {
   // The resume test can fail: the same checkpoint with the random engine restarted from

@@ -95,7 +95,7 @@ TEST_P(LandmarkRemoval, MergingIsConditioningOnEquality) {
 
 INSTANTIATE_TEST_SUITE_P(Filters, LandmarkRemoval,
                          ::testing::Values("ekf", "eif", "seif:mean=exact,active=30", "seif:mean=amortized,active=30",
-                                           "ekf:linearization=fej"),
+                                           "seif:mean=amortized,active=30,coarse=rigid", "ekf:linearization=fej"),
                          [](const auto& param_info) {
                            std::string n = param_info.param;
                            for (char& c : n) {

@@ -191,6 +191,17 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsWithTheGaugeKept) {
   expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
 }
 
+TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsWithTheCoarseLevel) {
+  // SeifOptions::coarse = Rigid keeps its sums per changed row, its list of changed rows
+  // reused from step to step: standard, and invariant iterated with 12 active, gauge kept.
+  seif::SeifOptions options;
+  options.coarse = seif::SeifOptions::Coarse::Rigid;
+  expectNoHeapAllocationInSteadyStateSteps(options);
+  options.active = 12;
+  options.gauge = seif::SeifOptions::Gauge::Kept;
+  expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
+}
+
 // Every marginal of a state comes from one factorisation: the first read factors H and
 // computes the selected inverse's columns it needs, later reads compute the rest of their
 // paths, and no read builds an N-row matrix (the landed getter solved with a dense

@@ -63,6 +63,9 @@ void bindSeifOptions(py::module_& m) {
   bindNamedEnum<SeifOptions::Gauge>(o, "Gauge", "'paper' | 'kept'", &SeifOptions::parseGauge, &nameOf<SeifOptions::Gauge>)
       .value("Paper", SeifOptions::Gauge::Paper)
       .value("Kept", SeifOptions::Gauge::Kept);
+  bindNamedEnum<SeifOptions::Coarse>(o, "Coarse", "'off' | 'rigid'", &SeifOptions::parseCoarse, &nameOf<SeifOptions::Coarse>)
+      .value("Off", SeifOptions::Coarse::Off)
+      .value("Rigid", SeifOptions::Coarse::Rigid);
   o.def(py::init<>())
       .def_readwrite("active", &SeifOptions::active, "theta_x: landmarks linked to the robot after each step")
       .def_readwrite("relax", &SeifOptions::relax, "K: landmarks relaxed per step besides the robot and the active ones")
@@ -87,9 +90,11 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("gauge", &SeifOptions::gauge,
                      "paper (eq. 44-51 as published) or kept: the sparsification claims no information on the "
                      "directions the posterior leaves free")
+      .def_readwrite("coarse", &SeifOptions::coarse,
+                     "off or rigid: the amortised mean also corrects the map's rigid motion each step (O(1))")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho", "gauge"});
+                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho", "gauge", "coarse"});
       });
 }
 

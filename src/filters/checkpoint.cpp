@@ -81,6 +81,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.u64(static_cast<std::uint64_t>(o.motion));
   out.f64(o.rho);
   out.u64(static_cast<std::uint64_t>(o.gauge));
+  out.u64(static_cast<std::uint64_t>(o.coarse));
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -110,6 +111,7 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
     if (!(o.rho >= 0.0 && o.rho < 1.0)) in.fail("rho must be in [0, 1)");
   }
   if (in.version() >= 7) o.gauge = static_cast<SeifOptions::Gauge>(in.u64Max("gauge", 1));
+  if (in.version() >= 8) o.coarse = static_cast<SeifOptions::Coarse>(in.u64Max("coarse", 1));
   return o;
 }
 

@@ -39,7 +39,7 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 // here is the one line a flag or a spec error shows.
 void applyProfile(FilterSpec& s, std::string_view v);
 
-const std::array<FilterOption, 21> kOptions = {{
+const std::array<FilterOption, 22> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
      "a recommended configuration: consistent = " "linearization=invariant,iterations=2,active=30,motion=deferred "
      "(honest covariances in constant time; README)",
@@ -121,6 +121,11 @@ const std::array<FilterOption, 21> kOptions = {{
      "the robot): the paper's rule claims information on them (paper), or none (kept)",
      [](FilterSpec& s, std::string_view v) { s.seif.gauge = SeifOptions::parseGauge(v); },
      [](const FilterSpec& s) { return std::string(optionName(s.seif.gauge)); }},
+    {"coarse", kSeif, kChoice, "off|rigid", 0, 0,
+     "the amortized mean's coarse level: off (Gauss-Seidel alone; the map lags its posterior "
+     "as a whole) or rigid (each step also corrects the map's rigid motion, O(1))",
+     [](FilterSpec& s, std::string_view v) { s.seif.coarse = SeifOptions::parseCoarse(v); },
+     [](const FilterSpec& s) { return std::string(optionName(s.seif.coarse)); }},
     {"motion", kSeif, kChoice, "immediate|deferred", 0, 0,
      "when motion enters H: at every control (immediate, the paper) or composed into one "
      "increment at the next observation (deferred: one motion update per scan)",

@@ -44,6 +44,9 @@ void SeifSlam::recoverMean(bool with_active) {
     chunk = std::min(random - done, kChunk);
     draw(chunk);
   }
+  // SeifOptions::coarse: then the map's rigid motion (seif_store_coarse.cpp). Skipped, the
+  // fine relaxation alone, when V^T H V is not positive definite.
+  if (store_.coarse()) store_.correctFrame();
 }
 
 void SeifSlam::relaxMean(int sweeps) {

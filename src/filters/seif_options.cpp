@@ -38,6 +38,7 @@ constexpr Names<SeifOptions::Sparsify, 3> kSparsify{"sparsification", {"seif", "
 constexpr Names<SeifOptions::Covariance, 3> kCovariance{"covariance recovery", {"exact", "local", "conservative"}};
 constexpr Names<SeifOptions::Motion, 2> kMotion{"motion timing", {"immediate", "deferred"}};
 constexpr Names<SeifOptions::Gauge, 2> kGauge{"gauge rule", {"paper", "kept"}};
+constexpr Names<SeifOptions::Coarse, 2> kCoarse{"coarse level", {"off", "rigid"}};
 constexpr Names<BatchOptions::Init, 3> kBatchInit{"batch start", {"ekf", "seif", "odometry"}};
 constexpr Names<BatchOptions::Solver, 2> kBatchSolver{"batch solver", {"cholesky", "kkt"}};
 
@@ -51,6 +52,7 @@ SeifOptions::Sparsify SeifOptions::parseSparsify(std::string_view s) { return kS
 SeifOptions::Covariance SeifOptions::parseCovariance(std::string_view s) { return kCovariance.parse(s); }
 SeifOptions::Motion SeifOptions::parseMotion(std::string_view s) { return kMotion.parse(s); }
 SeifOptions::Gauge SeifOptions::parseGauge(std::string_view s) { return kGauge.parse(s); }
+SeifOptions::Coarse SeifOptions::parseCoarse(std::string_view s) { return kCoarse.parse(s); }
 
 std::string_view optionName(SeifOptions::Mean v) { return kMean.name(v); }
 std::string_view optionName(SeifOptions::Deactivate v) { return kDeactivate.name(v); }
@@ -60,6 +62,7 @@ std::string_view optionName(SeifOptions::Sparsify v) { return kSparsify.name(v);
 std::string_view optionName(SeifOptions::Covariance v) { return kCovariance.name(v); }
 std::string_view optionName(SeifOptions::Motion v) { return kMotion.name(v); }
 std::string_view optionName(SeifOptions::Gauge v) { return kGauge.name(v); }
+std::string_view optionName(SeifOptions::Coarse v) { return kCoarse.name(v); }
 
 BatchOptions::Init BatchOptions::parseInit(std::string_view s) { return kBatchInit.parse(s); }
 BatchOptions::Solver BatchOptions::parseSolver(std::string_view s) { return kBatchSolver.parse(s); }

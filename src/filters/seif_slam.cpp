@@ -39,6 +39,12 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
     throw InvalidArgument("seif: gauge=kept does not combine with sparsify=conservative (its scale runs away); "
                           "use one of them");
   }
+  if (options.coarse == SeifOptions::Coarse::Rigid) {
+    if (options.mean == SeifOptions::Mean::Exact) {
+      throw InvalidArgument("seif: coarse=rigid corrects the amortized mean; mean=exact solves it");
+    }
+    store_.enableCoarse();
+  }
   if (options_.covariance == SeifOptions::Covariance::Conservative) options_.bounds = true;
   order_.reserve(kMaxLocalLandmarks + 1);
   bound_slots_.reserve(kMaxLocalLandmarks + 1);
@@ -79,6 +85,7 @@ void SeifSlam::guarded(const Step& step) {
   store_.beginTransaction();
   try {
     step();
+    store_.settleCoarse();  // between steps every row is in the coarse sums (checkpoints)
   } catch (...) {
     store_.rollbackTransaction();
     book_.undo(book);
@@ -158,7 +165,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   // outliers out.
   const Pose2 x = store_.robotMean();
   const std::span<const PlannedObservation> plan =
-      book_.plan(observations, sensor, x, [&](int slot) { return store_.node(slot).mu; });
+      book_.plan(observations, sensor, x, [&](int slot) { return store_.mean(slot); });
   // Invariant (update() has re-anchored): the Jacobians' heading lever arm at the anchors.
   const bool invariant = config_.linearization == Linearization::Invariant;
   const std::size_t sparsified = sparsifications_;
@@ -183,7 +190,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
     if (p.first) store_.addLandmark(p.z->landmark, p.initial);
     std::optional<Anchors> anchors;
     if (invariant) anchors = Anchors{store_.robotAnchor(), store_.node(p.slot).anchor};
-    const MeasurementInformation info = measurementInformation(sensor, x, store_.node(p.slot).mu, *p.z,
+    const MeasurementInformation info = measurementInformation(sensor, x, store_.mean(p.slot), *p.z,
                                                                scaledNoiseInverse(sensor, *p.z), p.jacobian_landmark,
                                                                anchors, p.constraint);
     // A new landmark's bound from its first observation and the robot's bound now.
@@ -212,7 +219,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
       const PlannedObservation& p = plan[k];
       if (p.first) continue;
       store_.addObservation(p.slot, -infos_[k].H, -infos_[k].b);
-      infos_[k] = measurementInformation(sensor, xi, store_.node(p.slot).mu, *p.z, scaledNoiseInverse(sensor, *p.z),
+      infos_[k] = measurementInformation(sensor, xi, store_.mean(p.slot), *p.z, scaledNoiseInverse(sensor, *p.z),
                                          p.jacobian_landmark, anchors_[k], p.constraint);
       store_.addObservation(p.slot, infos_[k].H, infos_[k].b);
     }
@@ -310,14 +317,14 @@ void SeifSlam::reanchor(std::span<const Observation> observations) {
 
 void SeifSlam::reanchorIfMoved(int slot) {
   const SeifStore::Node& n = store_.node(slot);
-  if ((n.mu - n.anchor).norm() <= options_.reanchor) return;
+  if ((store_.mean(slot) - n.anchor).norm() <= options_.reanchor) return;
   // Its neighbours join the robot's links: make room first (the local block is bounded).
   const auto room = [&] {
     return static_cast<int>(store_.robotLinks().size() + n.links.size()) < kMaxLocalLandmarks - 1;
   };
   if (!room()) sparsify();
   if (!room()) return;  // a landmark with more links than a local block holds keeps its anchor
-  reanchorLandmark(slot, n.mu);
+  reanchorLandmark(slot, store_.mean(slot));
 }
 
 void SeifSlam::reanchorLandmark(int slot, const Vec2& to) {
@@ -406,7 +413,7 @@ Eigen::MatrixXd SeifSlam::covariance() const {
 
 Pose2 SeifSlam::pose() const { return wrapHeading(Pose2(robotMean())); }
 
-Vec2 SeifSlam::landmark(int id) const { return store_.node(book_.require(id)).mu; }
+Vec2 SeifSlam::landmark(int id) const { return store_.mean(book_.require(id)); }
 
 // The marginals are read off the selected inverse of the cached factor (SparseMarginals):
 // H stores every robot and landmark diagonal block in full, so each lies in its pattern.
@@ -480,7 +487,7 @@ Marginal SeifSlam::marginal(std::span<const int> landmarks, bool pose, MarginalM
       m.mean.segment<3>(r) = store_.robotMean();
       r += 3;
     } else {
-      m.mean.segment<2>(r) = store_.node(v).mu;
+      m.mean.segment<2>(r) = store_.mean(v);
       r += 2;
     }
   }

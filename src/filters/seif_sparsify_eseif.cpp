@@ -90,12 +90,12 @@ bool SeifSlam::partitionObservations(std::span<const Observation> z, const Measu
     const int slot = book_.find(o.landmark);
     if (std::find(beta_slots_.begin(), beta_slots_.end(), slot) != beta_slots_.end()) continue;
     const Mat2 Z_inv = sensor.noise(o).inverse();
-    if (book_.rejects(sensor, x, store_.node(slot).mu, o)) {
+    if (book_.rejects(sensor, x, store_.mean(slot), o)) {
       roles_[static_cast<std::size_t>(i)] = kRejected;
       continue;
     }
     Mat23 J_x;
-    sensor.predict(x, store_.node(slot).mu, &J_x);
+    sensor.predict(x, store_.mean(slot), &J_x);
     A.noalias() += J_x.transpose() * Z_inv * J_x;
     roles_[static_cast<std::size_t>(i)] = kBeta;
     beta_.push_back(o);
@@ -126,7 +126,7 @@ bool SeifSlam::relocalizeRobot(const MeasurementModel& sensor) {
     Vec3 g = Vec3::Zero();
     for (std::size_t k = 0; k < beta_.size(); ++k) {
       Mat23 J_x;
-      const Vec2 zhat = sensor.predict(x, store_.node(beta_slots_[k]).mu, &J_x);
+      const Vec2 zhat = sensor.predict(x, store_.mean(beta_slots_[k]), &J_x);
       const Eigen::Matrix<double, 3, 2> JtZ = J_x.transpose() * sensor.noise(beta_[k]).inverse();
       A.noalias() += JtZ * J_x;
       g.noalias() += JtZ * sensor.residual(beta_[k].z, zhat);
@@ -147,7 +147,7 @@ bool SeifSlam::relocalizeRobot(const MeasurementModel& sensor) {
     const int slot = beta_slots_[k];
     const std::optional<Anchors> anchors =
         invariant ? std::optional<Anchors>(Anchors{store_.robotAnchor(), store_.node(slot).anchor}) : std::nullopt;
-    const MeasurementInformation info = measurementInformation(sensor, x, store_.node(slot).mu, beta_[k],
+    const MeasurementInformation info = measurementInformation(sensor, x, store_.mean(slot), beta_[k],
                                                                sensor.noise(beta_[k]).inverse(), std::nullopt, anchors);
     store_.addObservation(slot, info.H, info.b);
   }

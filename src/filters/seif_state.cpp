@@ -55,6 +55,18 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifStore& s) {
   out.u64(s.blocks_touched_);
   out.u64(s.landmark_links_);
   out.u64(s.max_landmark_links_);
+  // The mean's coarse level: the sums as kept (recomputing them would round differently).
+  out.u64(s.coarse_ ? 1 : 0);
+  if (!s.coarse_) return;
+  out.fixed(s.frame_);
+  out.fixed(s.coarse_origin_);
+  out.fixed(s.coarse_Vx_);
+  out.fixed(s.coarse_g_);
+  out.fixed(s.coarse_A_);
+  for (const SeifStore::Node& n : s.nodes_) {
+    out.fixed(n.ref);
+    out.fixed(n.w);
+  }
 }
 
 void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
@@ -137,6 +149,22 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
   s.landmark_links_ = static_cast<std::size_t>(in.u64("landmark links"));
   if (2 * s.landmark_links_ != link_ends) in.fail("the landmark link count disagrees with the links stored");
   s.max_landmark_links_ = static_cast<std::size_t>(in.u64("most links of a landmark"));
+  s.coarse_ = in.version() >= 8 && in.u64Max("coarse level", 1) == 1;
+  s.coarse_dirty_.clear();
+  if (!s.coarse_) {
+    s.frame_.setZero();
+    return;
+  }
+  in.fixed("coarse frame", s.frame_, true);
+  in.fixed("coarse origin", s.coarse_origin_, true);
+  in.fixed("coarse robot basis", s.coarse_Vx_, true);
+  in.fixed("coarse residual", s.coarse_g_, true);
+  in.fixed("coarse information", s.coarse_A_, true);
+  for (SeifStore::Node& n : s.nodes_) {
+    in.fixed("landmark coarse reference", n.ref, true);
+    in.fixed("landmark coarse row", n.w, true);
+    n.coarse_dirty = false;
+  }
 }
 
 void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
@@ -166,6 +194,9 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
   in.section("seif");
   readGate(in, f.book_.gate_);
   read(in, f.store_);
+  if (f.store_.coarse() != (f.options_.coarse == SeifOptions::Coarse::Rigid)) {
+    in.fail("the store's coarse level disagrees with the filter's options");
+  }
   f.book_.ids_ = f.store_.ids();
   f.book_.slot_.clear();
   for (int s = 0; s < f.book_.size(); ++s) f.book_.slot_.emplace(f.book_.ids_[static_cast<std::size_t>(s)], s);

@@ -27,6 +27,7 @@ SeifStore::SeifStore(const Mat3& H_xx, const Vec3& mu_x)
 // ---------------------------------------------------------------- transactions --------
 
 void SeifStore::beginTransaction() {
+  settleCoarse();
   Journal& j = journal_;
   j.open = true;
   ++j.id;
@@ -34,6 +35,10 @@ void SeifStore::beginTransaction() {
   j.b_x = b_x_;
   j.mu_x = mu_x_;
   j.robot_anchor = robot_anchor_;
+  j.frame = frame_;
+  j.coarse_g = coarse_g_;
+  j.coarse_Vx = coarse_Vx_;
+  j.coarse_A = coarse_A_;
   j.robot_links = robot_links_;  // at most kMaxLocalLandmarks: no allocation
   j.nodes = nodes_.size();
   j.ids = ids_.size();
@@ -50,11 +55,12 @@ void SeifStore::beginTransaction() {
 void SeifStore::commitTransaction() { journal_.open = false; }
 
 SeifStore::Node& SeifStore::write(int slot) {
+  touchCoarse(slot);
   Node& node = nodes_[static_cast<std::size_t>(slot)];
   Journal& j = journal_;
   if (j.open && node.journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
     j.entries.push_back({slot, true, j.saved.size()});
-    j.saved.push_back({node.H, node.bound, node.b, node.mu, node.anchor, node.active, node.links.size()});
+    j.saved.push_back({node.H, node.bound, node.b, node.mu, node.anchor, node.w, node.active, node.links.size()});
     node.journaled = j.id;
   }
   return node;
@@ -69,6 +75,17 @@ Vec2& SeifStore::writeMean(int slot) {
     node.mean_journaled = j.id;
   }
   return node.mu;
+}
+
+void SeifStore::assignMean(int slot, const Vec2& mean) {
+  Vec2& mu = writeMean(slot);
+  if (coarse_) {
+    const Node& n = node(slot);
+    if (!n.coarse_dirty) coarse_g_.noalias() -= n.w.transpose() * (mean - (mu + frameOffset(n.ref)));  // -w_i^T dmu_i
+    mu = mean - frameOffset(n.ref);
+  } else {
+    mu = mean;
+  }
 }
 
 Mat2& SeifStore::writeLink(int slot, std::size_t index) {
@@ -102,12 +119,21 @@ void SeifStore::rollbackTransaction() {
       node.b = n.b;
       node.mu = n.mu;
       node.anchor = n.anchor;
+      node.w = n.w;
       node.active = n.active;
       node.links.resize(n.links_count);  // only shrinks: links grow at the end within a step
     } else {
       node.mu = j.means_of[e.index];
     }
   }
+  for (int slot : coarse_dirty_) {  // clean at beginTransaction(): their saved w is the sums'
+    if (static_cast<std::size_t>(slot) < j.nodes) nodes_[static_cast<std::size_t>(slot)].coarse_dirty = false;
+  }
+  coarse_dirty_.clear();
+  frame_ = j.frame;
+  coarse_g_ = j.coarse_g;
+  coarse_Vx_ = j.coarse_Vx;
+  coarse_A_ = j.coarse_A;
   nodes_.resize(j.nodes);
   ids_.resize(j.ids);
   H_xx_ = j.H_xx;
@@ -161,8 +187,14 @@ int SeifStore::addLandmark(int id, const Vec2& mu) {
   const int slot = size();
   ids_.push_back(id);
   nodes_.emplace_back();
-  nodes_.back().mu = mu;
-  nodes_.back().anchor = mu;
+  Node& n = nodes_.back();
+  n.ref = mu;
+  n.mu = storedMean(mu, mu);
+  n.anchor = mu;
+  if (coarse_) {  // its terms are zero until settleCoarse() adds them
+    n.coarse_dirty = true;
+    coarse_dirty_.push_back(slot);
+  }
   return slot;
 }
 
@@ -208,7 +240,7 @@ void SeifStore::applyReanchor(const Vec3& q_x, double a) {
   // b' = b - mu_t q - e_t (q^T mu - a mu_t). Only the robot's heading row and column change.
   const double mu_t = mu_x_(2);
   double q_mu = q_x.dot(mu_x_);
-  for (const auto& [slot, q] : reanchor_q_) q_mu += q.dot(nodes_[static_cast<std::size_t>(slot)].mu);
+  for (const auto& [slot, q] : reanchor_q_) q_mu += q.dot(mean(slot));
   H_xx_.col(2) -= q_x;
   H_xx_.row(2) -= q_x.transpose();
   H_xx_(2, 2) += a;
@@ -248,6 +280,8 @@ void SeifStore::removeRobotLink(int slot) {
 
 void SeifStore::marginalizeLandmark(int slot) {
   requireNoTransaction("marginalizeLandmark()");
+  touchCoarse(slot);
+  for (const Link& k : node(slot).links) touchCoarse(k.slot);
   const Node& l = nodes_[static_cast<std::size_t>(slot)];
   Eigen::LLT<Mat2> llt(l.H);
   if (llt.info() != Eigen::Success) {
@@ -292,6 +326,8 @@ void SeifStore::marginalizeLandmark(int slot) {
 
 void SeifStore::mergeLandmarks(int keep, int drop) {
   requireNoTransaction("mergeLandmarks()");
+  touchCoarse(keep);
+  touchCoarse(drop);
   Node& k = nodes_[static_cast<std::size_t>(keep)];
   const Node d = nodes_[static_cast<std::size_t>(drop)];  // a copy: links change below
   // H'_kk = H_kk + H_kd + H_dk + H_dd, b'_k = b_k + b_d.
@@ -320,13 +356,18 @@ void SeifStore::mergeLandmarks(int keep, int drop) {
 
 void SeifStore::deleteLandmark(int slot) {
   requireNoTransaction("deleteLandmark()");
+  touchCoarse(slot);
   // Unlink it from its neighbours and the robot.
   for (const Link& l : nodes_[static_cast<std::size_t>(slot)].links) {
+    touchCoarse(l.slot);
     std::vector<Link>& back = nodes_[static_cast<std::size_t>(l.slot)].links;
     back.erase(std::find_if(back.begin(), back.end(), [&](const Link& b) { return b.slot == slot; }));
     --landmark_links_;
   }
   if (nodes_[static_cast<std::size_t>(slot)].active >= 0) removeRobotLink(slot);
+  // Its terms are out of the coarse sums; its neighbours' go back before slots move.
+  nodes_[static_cast<std::size_t>(slot)].coarse_dirty = false;
+  settleCoarse();
   // The last slot moves into its place.
   const int last = size() - 1;
   if (slot != last) {
@@ -360,7 +401,9 @@ void SeifStore::setMean(const Eigen::VectorXd& mu) {
     journal_.means_saved = true;
   }
   mu_x_ = mu.head<3>();
+  frame_.setZero();
   for (int s = 0; s < size(); ++s) nodes_[static_cast<std::size_t>(s)].mu = mu.segment<2>(StateLayout::landmark(s));
+  if (coarse_) enableCoarse();  // the sums again, O(N) as this
 }
 
 // ---------------------------------------------------------------- the local block ------
@@ -419,7 +462,7 @@ void SeifStore::gatherListed() {
     const int r = 3 + 2 * i;
     local_H_.block<2, 2>(r, r) = n_a.H;
     local_b_.segment<2>(r) = n_a.b;
-    local_mu_.segment<2>(r) = n_a.mu;
+    local_mu_.segment<2>(r) = mean(a);
     if (n_a.active >= 0) {
       const Mat32& H_xl = robot_links_[static_cast<std::size_t>(n_a.active)].H;
       local_H_.block<3, 2>(0, r) = H_xl;
@@ -450,7 +493,7 @@ void SeifStore::scatter() {
       const int r = 3 + 2 * i;
       node.H = local_H_.block<2, 2>(r, r);
       node.b = local_b_.segment<2>(r);
-      node.mu = local_mu_.segment<2>(r);
+      node.mu = storedMean(local_mu_.segment<2>(r), node.ref);
       if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
       for (std::size_t e = 0; e < node.links.size(); ++e) {
         const int j = nodes_[static_cast<std::size_t>(node.links[e].slot)].gathered;
@@ -478,7 +521,7 @@ void SeifStore::scatter() {
 void SeifStore::relaxRobot() {
   // eq. (42): mu_x = H_xx^-1 (b_x - sum_l H_xl mu_l)
   Vec3 rhs = b_x_;
-  for (const RobotLink& l : robot_links_) rhs.noalias() -= l.H * nodes_[static_cast<std::size_t>(l.slot)].mu;
+  for (const RobotLink& l : robot_links_) rhs.noalias() -= l.H * mean(l.slot);
   Eigen::LLT<Mat3> llt(H_xx_);
   if (llt.info() != Eigen::Success) {
     throw NumericError("seif: robot information block is not positive definite at step " +
@@ -491,7 +534,7 @@ void SeifStore::relaxRobot() {
 void SeifStore::relaxLandmark(int slot) {
   const Node& node = nodes_[static_cast<std::size_t>(slot)];
   Vec2 rhs = node.b;
-  for (const Link& l : node.links) rhs.noalias() -= l.H * nodes_[static_cast<std::size_t>(l.slot)].mu;
+  for (const Link& l : node.links) rhs.noalias() -= l.H * mean(l.slot);
   if (node.active >= 0) {
     rhs.noalias() -= robot_links_[static_cast<std::size_t>(node.active)].H.transpose() * mu_x_;
   }
@@ -502,7 +545,7 @@ void SeifStore::relaxLandmark(int slot) {
         << " is not positive definite at step " << step_;
     throw NumericError(msg.str());
   }
-  writeMean(slot) = llt.solve(rhs);
+  assignMean(slot, llt.solve(rhs));
   blocks_touched_ += 1 + node.links.size() + (node.active >= 0 ? 1 : 0);
 }
 
@@ -530,7 +573,7 @@ void SeifStore::solveLocalMean() {
     Vec2 rhs = local_rhs_.segment<2>(row);  // summed in a register, in the links' order
     for (const Link& l : n.links) {
       const Node& other = node(l.slot);
-      if (other.active < 0) rhs.noalias() -= l.H * other.mu;
+      if (other.active < 0) rhs.noalias() -= l.H * mean(l.slot);
     }
     local_rhs_.segment<2>(row) = rhs;
     blocks_touched_ += n.links.size();
@@ -543,7 +586,7 @@ void SeifStore::solveLocalMean() {
   local_mu_ = llt.solve(local_rhs_);
   mu_x_ = local_mu_.head<3>();
   for (std::size_t i = 0; i < gathered_.size(); ++i) {
-    writeMean(gathered_[i]) = local_mu_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i));
+    assignMean(gathered_[i], local_mu_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i)));
   }
 }
 
@@ -632,7 +675,7 @@ Eigen::VectorXd SeifStore::informationVector() const {
 Eigen::VectorXd SeifStore::mean() const {
   Eigen::VectorXd mu(3 + 2 * size());
   mu.head<3>() = mu_x_;
-  for (int s = 0; s < size(); ++s) mu.segment<2>(StateLayout::landmark(s)) = node(s).mu;
+  for (int s = 0; s < size(); ++s) mu.segment<2>(StateLayout::landmark(s)) = mean(s);
   return mu;
 }
 

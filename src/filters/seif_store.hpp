@@ -45,6 +45,12 @@ class SeifStore {
     /// An upper bound (Loewner order) on its marginal covariance under H, kept by the filter
     /// (seif_bounds.hpp: MarginalMode::Conservative); zero until its first sighting sets it.
     Mat2 bound = Mat2::Zero();
+    // The mean's coarse level (enableCoarse(); seif_store_coarse.cpp): where its rigid
+    // motions are taken (its mean when it entered), its row of H V, and whether that row is
+    // out of the sums until settleCoarse().
+    Vec2 ref = Vec2::Zero();
+    Mat23 w = Mat23::Zero();
+    bool coarse_dirty = false;
   };
 
   /// A map without landmarks: the robot's information H_xx at mean mu_x (b_x = H_xx mu_x).
@@ -58,6 +64,12 @@ class SeifStore {
   const Vec3& robotVector() const { return b_x_; }
   const Vec3& robotMean() const { return mu_x_; }
   const Node& node(int slot) const { return nodes_[static_cast<std::size_t>(slot)]; }
+  /// Landmark `slot`'s mean: Node::mu, plus the map's rigid correction when the coarse level
+  /// is on (Node::mu then holds the mean before the corrections since it was last written).
+  Vec2 mean(int slot) const {
+    const Node& n = node(slot);
+    return coarse_ ? Vec2(n.mu + frameOffset(n.ref)) : n.mu;
+  }
   /// The active landmarks, in no particular order (removeRobotLink() swaps in the last).
   const std::vector<RobotLink>& robotLinks() const { return robot_links_; }
   /// H_{a,c} of two landmark slots, or nullptr when they are not linked.
@@ -121,6 +133,28 @@ class SeifStore {
   /// Sets landmark `slot`'s covariance bound (Node::bound).
   void setBound(int slot, const Mat2& bound) { write(slot).bound = bound; }
 
+  // ---- the mean's coarse level (seif_store_coarse.cpp; SeifOptions::coarse)
+  // A two-level relaxation: Gauss-Seidel (above) corrects the mean where H changed, but the
+  // smooth error it leaves, the map moved or turned against the posterior, decays slowly.
+  // The coarse level corrects it over V, the rigid motions of robot and map (rows
+  // V_i = [I, J (ref_i - o)] per landmark, [I, J (mu_p - o); 0 0 1] for the robot), by the
+  // Galerkin step alpha = (V^T H V)^-1 V^T (b - H mu), mu += V alpha. Both sums are kept in
+  // O(1) per change: g = sum_i (V_i^T b_i - w_i^T mu_i) and A = sum_i V_i^T w_i with
+  // w_i = (H V)_i, each term a landmark's own. The map's share of V alpha is held as one
+  // frame offset (mean()), not written into every landmark.
+  /// Turns the coarse level on (an empty map, or sums recomputed: O(N)).
+  void enableCoarse();
+  bool coarse() const { return coarse_; }
+  /// The Galerkin step on the rigid motions (above). O(active + changed rows). False (and
+  /// nothing changed) when V^T H V is not positive definite.
+  bool correctFrame();
+  /// Puts the rows changed since the last call back into the sums: O(their links).
+  void settleCoarse();
+  /// V^T (b - H mu) and V^T H V as the store keeps them (the robot's terms and the rows
+  /// not yet settled added), and the same from scratch over the whole map (O(N); tests).
+  std::pair<Vec3, Mat3> coarseSums() const;
+  std::pair<Vec3, Mat3> coarseSumsFromScratch() const;
+
   // ---- transactions: a step all or nothing
   /// Journals every change until commitTransaction() or rollbackTransaction(): the robot's
   /// state and links once, each landmark node's own blocks and link count before its first
@@ -144,7 +178,7 @@ class SeifStore {
   /// The same for landmark `slot` (M = I + J (mu_l - a_l) e_theta^T over its rows): the
   /// robot's heading row gains the landmark's neighbours, which become active (linked to
   /// the robot) when they were not. O(links of the landmark).
-  void reanchorLandmark(int slot) { reanchorLandmark(slot, node(slot).mu); }
+  void reanchorLandmark(int slot) { reanchorLandmark(slot, mean(slot)); }
   /// Re-anchors landmark `slot` at `to` (a merge anchors two landmarks at one point).
   void reanchorLandmark(int slot, const Vec2& to);
 
@@ -207,6 +241,22 @@ class SeifStore {
   /// The re-anchoring of reanchorRobot()/reanchorLandmark(): q = H dc over the variable's
   /// blanket (q_x on the robot, q_ in reanchor_q_ on landmarks) and a = dc^T H dc.
   void applyReanchor(const Vec3& q_x, double a);
+  /// Sets landmark `slot`'s mean (journaled; its term of g follows).
+  void assignMean(int slot, const Vec2& mean);
+  /// V_i beta for a landmark whose rigid motions are taken at `ref`.
+  Vec2 frameOffset(const Vec2& ref) const {
+    const Vec2 r = ref - coarse_origin_;
+    return frame_.head<2>() + frame_(2) * Vec2(-r.y(), r.x());
+  }
+  /// Node::mu that holds mean `m` at `ref`.
+  Vec2 storedMean(const Vec2& m, const Vec2& ref) const { return coarse_ ? Vec2(m - frameOffset(ref)) : m; }
+  /// Takes landmark `slot`'s terms out of g and A before its row of H, b or its H_ix changes
+  /// (every write() does); settleCoarse() puts them back.
+  void touchCoarse(int slot);
+  void coarseTerms(int slot, const Mat23& w, Vec3& g, Mat3& A) const;  // landmark slot's terms with row w
+  Mat23 coarseRow(int slot) const;  // (H V)_slot
+  Mat3 robotBasis() const;          // V_x at the robot's mean
+  void robotCoarseTerms(Vec3& g, Mat3& A) const;
 
   std::vector<int> ids_;
   Mat3 H_xx_;
@@ -228,12 +278,25 @@ class SeifStore {
   LocalVector local_rhs_;
   std::vector<std::pair<int, Vec2>> reanchor_q_;  // applyReanchor()'s landmark entries
 
+  // The coarse level (above): the map's frame offset beta, the origin o of the rotations,
+  // the robot's rows V_x the active landmarks' w hold, the landmark sums g and A, and the
+  // landmarks whose terms are out of them until settleCoarse().
+  bool coarse_ = false;
+  Vec3 frame_ = Vec3::Zero();
+  Vec2 coarse_origin_ = Vec2::Zero();
+  Mat3 coarse_Vx_ = Mat3::Identity();
+  Vec3 coarse_g_ = Vec3::Zero();
+  Mat3 coarse_A_ = Mat3::Zero();
+  std::vector<int> coarse_dirty_;
+
   struct Journal {
     bool open = false;
     long id = 0;  // of the open (or last) transaction
     Mat3 H_xx;
     Vec3 b_x, mu_x;
     Vec2 robot_anchor;
+    Vec3 frame, coarse_g;
+    Mat3 coarse_Vx, coarse_A;
     std::vector<RobotLink> robot_links;
     std::size_t nodes = 0, ids = 0, landmark_links = 0, max_landmark_links = 0;
     long step = 0;
@@ -248,6 +311,7 @@ class SeifStore {
     struct SavedNode {
       Mat2 H, bound;
       Vec2 b, mu, anchor;
+      Mat23 w;
       int active;
       std::size_t links_count;
     };

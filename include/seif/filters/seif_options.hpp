@@ -15,6 +15,7 @@ struct SeifOptions {
   enum class Covariance { Exact, Local, Conservative };
   enum class Motion { Immediate, Deferred };
   enum class Gauge { Paper, Kept };
+  enum class Coarse { Off, Rigid };
 
   int active = 6;  ///< theta_x (the paper's name): landmarks linked to the robot after each step
   int relax = 10;      ///< K: landmarks relaxed per step besides the robot and the active ones
@@ -98,6 +99,12 @@ struct SeifOptions {
   /// links to the landmarks it keeps are corrected so that the result claims none
   /// (docs/consistency.md, "The gauge"); O(1).
   Gauge gauge = Gauge::Paper;
+  /// The amortised mean's coarse level. Off: Gauss-Seidel alone (eq. 42), whose error
+  /// along the map's rigid motions decays slowly (the map lags its posterior as a whole).
+  /// Rigid: after each relaxation, the Galerkin correction over the rigid motions of robot
+  /// and map, alpha = (V^T H V)^-1 V^T (b - H mu), kept in O(1) per step
+  /// (docs/consistency.md, "The mean's coarse level"). Only with Mean::Amortized.
+  Coarse coarse = Coarse::Off;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
@@ -107,6 +114,7 @@ struct SeifOptions {
   static Covariance parseCovariance(std::string_view s);  ///< "exact" | "local" | "conservative"
   static Motion parseMotion(std::string_view s);          ///< "immediate" | "deferred"
   static Gauge parseGauge(std::string_view s);            ///< "paper" | "kept"
+  static Coarse parseCoarse(std::string_view s);          ///< "off" | "rigid"
 };
 
 /// The name parse*() takes for each value, as specs, flags and metrics.json spell it.
@@ -118,5 +126,6 @@ std::string_view optionName(SeifOptions::Sparsify v);
 std::string_view optionName(SeifOptions::Covariance v);
 std::string_view optionName(SeifOptions::Motion v);
 std::string_view optionName(SeifOptions::Gauge v);
+std::string_view optionName(SeifOptions::Coarse v);
 
 }  // namespace seif
