@@ -99,6 +99,8 @@ TEST(FilterOptions, AProfileIsOverriddenByTheKeysAfterIt) {
   EXPECT_EQ(s.linearization, seif::Linearization::Invariant);
   EXPECT_EQ(s.iterations, 2);
   EXPECT_EQ(s.seif.active, 8);
+  EXPECT_EQ(s.seif.coarse, seif::SeifOptions::Coarse::Rigid);
+  EXPECT_EQ(s.seif.relax, 30);
   EXPECT_EQ(seif::parseFilterSpec("seif:active=8,profile=consistent").seif.active, 30);
   EXPECT_THROW(seif::parseFilterSpec("seif:profile=fast"), seif::InvalidArgument);
   EXPECT_THROW(seif::parseFilterSpec("ekf:profile=consistent"), seif::InvalidArgument);

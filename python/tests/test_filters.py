@@ -325,3 +325,22 @@ def test_seif_gauge_reaches_python(paper_world):
     paper = translation_information("seif:active=4,mean=exact")
     assert kept < 1.01 * reference
     assert paper > 10.0 * reference
+
+
+def test_seif_coarse_level_reaches_python(paper_world):
+    """coarse=rigid, set from a spec or on SeifOptions: the amortised map lies nearer the
+    posterior's mean H^-1 b than Gauss-Seidel alone leaves it (docs/consistency.md, "The
+    mean's coarse level")."""
+    data, world = paper_world
+    options = seif.SeifOptions()
+    options.coarse = "rigid"
+    assert options.coarse == seif.SeifOptions.Coarse.Rigid
+    assert "coarse" in repr(options)
+
+    def lag(spec):
+        f = seif.make_filter(spec, seif.start_pose(data), paper_config(world))
+        seif.run_filter(f, data)
+        return np.linalg.norm(f.mean()[3:] - f.posterior_mean()[3:])
+
+    base = "seif:linearization=invariant,iterations=2,active=6,gauge=kept"
+    assert lag(base + ",coarse=rigid") < 0.5 * lag(base)

@@ -39,10 +39,8 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
     throw InvalidArgument("seif: gauge=kept does not combine with sparsify=conservative (its scale runs away); "
                           "use one of them");
   }
-  if (options.coarse == SeifOptions::Coarse::Rigid) {
-    if (options.mean == SeifOptions::Mean::Exact) {
-      throw InvalidArgument("seif: coarse=rigid corrects the amortized mean; mean=exact solves it");
-    }
+  // The coarse level corrects the amortized mean; mean=exact solves it (coarse unused).
+  if (options.coarse == SeifOptions::Coarse::Rigid && options.mean == SeifOptions::Mean::Amortized) {
     store_.enableCoarse();
   }
   if (options_.covariance == SeifOptions::Covariance::Conservative) options_.bounds = true;

@@ -194,7 +194,8 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
   in.section("seif");
   readGate(in, f.book_.gate_);
   read(in, f.store_);
-  if (f.store_.coarse() != (f.options_.coarse == SeifOptions::Coarse::Rigid)) {
+  if (f.store_.coarse() != (f.options_.coarse == SeifOptions::Coarse::Rigid &&
+                            f.options_.mean == SeifOptions::Mean::Amortized)) {
     in.fail("the store's coarse level disagrees with the filter's options");
   }
   f.book_.ids_ = f.store_.ids();

@@ -103,7 +103,7 @@ struct SeifOptions {
   /// along the map's rigid motions decays slowly (the map lags its posterior as a whole).
   /// Rigid: after each relaxation, the Galerkin correction over the rigid motions of robot
   /// and map, alpha = (V^T H V)^-1 V^T (b - H mu), kept in O(1) per step
-  /// (docs/consistency.md, "The mean's coarse level"). Only with Mean::Amortized.
+  /// (docs/consistency.md, "The mean's coarse level"). Unused with Mean::Exact.
   Coarse coarse = Coarse::Off;
 
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
