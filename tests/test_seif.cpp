@@ -413,7 +413,8 @@ TEST(Seif, AStepThatFailsNumericallyLeavesTheFilterAsItWas) {
   // observation whose noise is negative definite (it passes the input checks - finite -
   // and adds negative information after the batch's first observations have entered).
   for (const char* spec : {"seif", "seif:sparsify=eseif,beta=2", "seif:relax-order=random,linearization=invariant,iterations=2",
-                           "seif:mean=exact", "seif:motion=deferred", "seif:profile=consistent,motion=deferred"}) {
+                           "seif:mean=exact", "seif:motion=deferred", "seif:profile=consistent,motion=deferred",
+                           "seif:coarse=rigid,linearization=invariant,iterations=2"}) {
     const test::Scenario s = test::makeScenario(3, 40, 40);
     const FilterConfig config = configFor(s);
     auto seif = makeFilter(spec, s.start, config), twin = makeFilter(spec, s.start, config);
@@ -435,6 +436,12 @@ TEST(Seif, AStepThatFailsNumericallyLeavesTheFilterAsItWas) {
     twin->predict(s.steps[half].u);
     EXPECT_THROW(seif->update(bad), seif::NumericError) << spec;
     EXPECT_EQ(seif->mean(), twin->mean()) << spec;
+    const SeifStore& store = dynamic_cast<const SeifSlam&>(*seif).store();
+    const SeifStore& twin_store = dynamic_cast<const SeifSlam&>(*twin).store();
+    for (int slot = 0; slot < store.size(); ++slot) {  // the coarse level's rows (coarse=rigid)
+      EXPECT_EQ(store.node(slot).w, twin_store.node(slot).w) << spec << ", slot " << slot;
+    }
+    EXPECT_EQ(store.coarseSums(), twin_store.coarseSums()) << spec;
     EXPECT_EQ(seif->information(), twin->information()) << spec;
     EXPECT_EQ(seif->landmarkIds(), twin->landmarkIds()) << spec;
     for (std::size_t k = half; k < s.steps.size(); ++k) {

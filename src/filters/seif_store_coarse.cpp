@@ -115,8 +115,9 @@ void SeifStore::enableCoarse() {
 
 bool SeifStore::correctFrame() {
   if (!coarse_) return false;
-  // V_x moves with the robot: the active landmarks' rows hold it through H_ix.
-  for (const RobotLink& l : robot_links_) touchCoarse(l.slot);
+  // V_x moves with the robot: the active landmarks' rows hold it through H_ix. write()
+  // journals them (their w changes) and takes their terms out.
+  for (const RobotLink& l : robot_links_) write(l.slot);
   coarse_Vx_ = robotBasis();
   settleCoarse();
   Vec3 g_x;
