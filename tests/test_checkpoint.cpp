@@ -366,7 +366,8 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
     const Scenario s = test::makeScenario(3, 8, 12);
     for (const auto& [file, spec] : {std::pair{"ekf.ckpt", "ekf:linearization=fej"}, std::pair{"eif.ckpt", "eif"},
                                      std::pair{"seif.ckpt", "seif:active=3,relax-order=random"},
-                                     std::pair{"eseif.ckpt", "seif:sparsify=eseif,active=3"}}) {
+                                     std::pair{"eseif.ckpt", "seif:sparsify=eseif,active=3"},
+                                     std::pair{"seif-coarse.ckpt", "seif:profile=consistent,active=3"}}) {
       std::unique_ptr<SlamFilter> f = makeFilter(spec, s.start, test::configFor(s));
       for (const Step& step : s.steps) f->step(step.u, step.observations);
       f->save(root / "corpus" / "fuzz_checkpoint" / file, CheckpointExtras{12, {{"spec", spec}}});

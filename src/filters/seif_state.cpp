@@ -67,6 +67,10 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifStore& s) {
     out.fixed(n.ref);
     out.fixed(n.w);
   }
+  // Rows waiting for the next settle, in order (none between steps, removals and merges,
+  // which settle their own; kept so that a checkpoint never depends on it).
+  out.count(s.coarse_dirty_.size());
+  for (int slot : s.coarse_dirty_) out.i64(slot);
 }
 
 void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
@@ -164,6 +168,14 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
     in.fixed("landmark coarse reference", n.ref, true);
     in.fixed("landmark coarse row", n.w, true);
     n.coarse_dirty = false;
+  }
+  const std::size_t dirty = in.count("coarse rows to settle", 9);
+  for (std::size_t k = 0; k < dirty; ++k) {
+    const int slot = static_cast<int>(in.i64In("coarse row to settle", 0, size - 1));
+    SeifStore::Node& n = s.nodes_[static_cast<std::size_t>(slot)];
+    if (n.coarse_dirty) in.fail("a coarse row listed twice");
+    n.coarse_dirty = true;
+    s.coarse_dirty_.push_back(slot);
   }
 }
 
