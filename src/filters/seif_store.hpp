@@ -29,7 +29,8 @@ class SeifStore {
   };
   // The fields are ordered by when they are read. The first 64 bytes hold what a neighbour's
   // visit reads (mu, active, gathered) with H; the next 64 what relaxing the node itself adds
-  // (b, links); the bound, used only with SeifOptions::bounds, comes last. 160 bytes.
+  // (b, links); the bound, used only with SeifOptions::bounds, and the coarse level's
+  // fields, used only with SeifOptions::coarse, come last. 240 bytes.
   struct Node {
     Vec2 mu = Vec2::Zero();
     int active = -1;    // position in robotLinks(), or -1 when passive
