@@ -13,7 +13,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <string>
 
 namespace {
@@ -121,11 +120,6 @@ TEST(CoarseLevel, OnlyWithTheAmortizedMean) {
   EXPECT_FALSE(asSeif(*makeFilter("seif:coarse=off", s.start, test::configFor(s))).store().coarse());
   EXPECT_THROW(makeFilter("seif:coarse=multigrid", s.start, test::configFor(s)), InvalidArgument);
 }
-
-}  // namespace
-
-
-namespace {
 
 TEST(CoarseLevel, ACheckpointAfterARemovalResumesBitExactly) {
   // A removal runs outside a step (not journaled) and settles the rows it changed itself:
