@@ -255,6 +255,7 @@ class SeifStore {
   /// (every write() does); settleCoarse() puts them back.
   void touchCoarse(int slot);
   void coarseTerms(int slot, const Mat23& w, Vec3& g, Mat3& A) const;  // landmark slot's terms with row w
+  Mat23 landmarkBasis(const Vec2& ref) const;  // V_i, rigid motions taken at ref
   Mat23 coarseRow(int slot) const;  // (H V)_slot
   Mat3 robotBasis() const;          // V_x at the robot's mean
   void robotCoarseTerms(Vec3& g, Mat3& A) const;

@@ -13,8 +13,6 @@
 
 #include <Eigen/Cholesky>
 
-#include <algorithm>
-
 namespace seif {
 
 namespace {
@@ -27,17 +25,18 @@ Mat3 SeifStore::robotBasis() const {
   return V;
 }
 
+Mat23 SeifStore::landmarkBasis(const Vec2& ref) const {
+  Mat23 V;  // V_i = [I, J (ref_i - o)]
+  V.leftCols<2>().setIdentity();
+  V.col(2) = quarterTurn(ref - coarse_origin_);
+  return V;
+}
+
 Mat23 SeifStore::coarseRow(int slot) const {
   // w_i = H_ii V_i + sum_j H_ij V_j + H_ix V_x
-  const auto basis = [this](const Node& n) {
-    Mat23 V;
-    V.leftCols<2>().setIdentity();
-    V.col(2) = quarterTurn(n.ref - coarse_origin_);
-    return V;
-  };
   const Node& n = node(slot);
-  Mat23 w = n.H * basis(n);
-  for (const Link& l : n.links) w.noalias() += l.H * basis(node(l.slot));
+  Mat23 w = n.H * landmarkBasis(n.ref);
+  for (const Link& l : n.links) w.noalias() += l.H * landmarkBasis(node(l.slot).ref);
   if (n.active >= 0) w.noalias() += robot_links_[static_cast<std::size_t>(n.active)].H.transpose() * coarse_Vx_;
   return w;
 }
@@ -45,9 +44,7 @@ Mat23 SeifStore::coarseRow(int slot) const {
 void SeifStore::coarseTerms(int slot, const Mat23& w, Vec3& g, Mat3& A) const {
   // V_i^T b_i - w_i^T mu_i and V_i^T w_i
   const Node& n = node(slot);
-  const Vec2 r = n.ref - coarse_origin_;
-  Mat23 V;
-  V << 1.0, 0.0, -r.y(), 0.0, 1.0, r.x();
+  const Mat23 V = landmarkBasis(n.ref);
   g = V.transpose() * n.b - w.transpose() * mean(slot);
   A = V.transpose() * w;
 }
@@ -84,12 +81,7 @@ void SeifStore::settleCoarse() {
 void SeifStore::robotCoarseTerms(Vec3& g, Mat3& A) const {
   // The robot's terms, fresh: w_x = H_xx V_x + sum_active H_xj V_j.
   Mat3 w = H_xx_ * coarse_Vx_;
-  for (const RobotLink& l : robot_links_) {
-    const Vec2 r = node(l.slot).ref - coarse_origin_;
-    Mat23 V;
-    V << 1.0, 0.0, -r.y(), 0.0, 1.0, r.x();
-    w.noalias() += l.H * V;
-  }
+  for (const RobotLink& l : robot_links_) w.noalias() += l.H * landmarkBasis(node(l.slot).ref);
   g = coarse_Vx_.transpose() * b_x_ - w.transpose() * mu_x_;
   A = coarse_Vx_.transpose() * w;
 }
@@ -144,9 +136,8 @@ std::pair<Vec3, Mat3> SeifStore::coarseSums() const {
   robotCoarseTerms(g, A);
   g += coarse_g_;
   A += coarse_A_;
-  for (std::size_t k = 0; k < coarse_dirty_.size(); ++k) {  // what settleCoarse() would add
-    const int slot = coarse_dirty_[k];
-    if (!node(slot).coarse_dirty || std::find(coarse_dirty_.begin(), coarse_dirty_.begin() + static_cast<std::ptrdiff_t>(k), slot) != coarse_dirty_.begin() + static_cast<std::ptrdiff_t>(k)) continue;
+  for (int slot : coarse_dirty_) {  // what settleCoarse() would add (each slot listed once)
+    if (!node(slot).coarse_dirty) continue;
     coarseTerms(slot, coarseRow(slot), g_k, A_k);
     g += g_k;
     A += A_k;
@@ -159,10 +150,7 @@ std::pair<Vec3, Mat3> SeifStore::coarseSumsFromScratch() const {
   const Eigen::Index n = 3 + 2 * static_cast<Eigen::Index>(size());
   Eigen::MatrixXd V = Eigen::MatrixXd::Zero(n, 3);
   V.topLeftCorner<3, 3>() = coarse_Vx_;
-  for (int s = 0; s < size(); ++s) {
-    const Vec2 r = node(s).ref - coarse_origin_;
-    V.block<2, 3>(StateLayout::landmark(s), 0) << 1.0, 0.0, -r.y(), 0.0, 1.0, r.x();
-  }
+  for (int s = 0; s < size(); ++s) V.block<2, 3>(StateLayout::landmark(s), 0) = landmarkBasis(node(s).ref);
   const Eigen::SparseMatrix<double> H = sparseInformation();
   const Eigen::VectorXd residual = informationVector() - H * mean();
   const Eigen::MatrixXd HV = H * V;
