@@ -218,9 +218,13 @@ void SeifStore::reanchorRobot() {
   robot_anchor_ = mu_x_.head<2>();
   if (dc.isZero(0.0)) return;
   const Vec3 q_x = H_xx_.leftCols<2>() * dc;
+  Vec3 r_x = b_x_ - H_xx_ * mu_x_;  // the residual b - H mu on the robot's rows
   reanchor_q_.clear();
-  for (const RobotLink& l : robot_links_) reanchor_q_.emplace_back(l.slot, l.H.topRows<2>().transpose() * dc);
-  applyReanchor(q_x, dc.dot(q_x.head<2>()));
+  for (const RobotLink& l : robot_links_) {
+    reanchor_q_.emplace_back(l.slot, l.H.topRows<2>().transpose() * dc);
+    r_x.noalias() -= l.H * mean(l.slot);
+  }
+  applyReanchor(q_x, dc.dot(q_x.head<2>()), dc.dot(r_x.head<2>()));
 }
 
 void SeifStore::reanchorLandmark(int slot, const Vec2& to) {
@@ -229,15 +233,25 @@ void SeifStore::reanchorLandmark(int slot, const Vec2& to) {
   node.anchor = to;
   if (dc.isZero(0.0)) return;
   const Vec3 q_x = node.active >= 0 ? Vec3(robot_links_[static_cast<std::size_t>(node.active)].H * dc) : Vec3::Zero();
+  Vec2 r = node.b - node.H * mean(slot);  // the residual b - H mu on the landmark's rows
+  if (node.active >= 0) r.noalias() -= robot_links_[static_cast<std::size_t>(node.active)].H.transpose() * mu_x_;
   reanchor_q_.clear();
   reanchor_q_.emplace_back(slot, node.H * dc);
-  for (const Link& k : node.links) reanchor_q_.emplace_back(k.slot, k.H.transpose() * dc);  // H_{k,l} dc
-  applyReanchor(q_x, dc.dot(reanchor_q_.front().second));
+  for (const Link& k : node.links) {
+    reanchor_q_.emplace_back(k.slot, k.H.transpose() * dc);  // H_{k,l} dc
+    r.noalias() -= k.H * mean(k.slot);
+  }
+  applyReanchor(q_x, dc.dot(reanchor_q_.front().second), dc.dot(r));
 }
 
-void SeifStore::applyReanchor(const Vec3& q_x, double a) {
-  // invariant.hpp: H' = H - q e_t^T - e_t q^T + a e_t e_t^T and b' = H' mu (the mean stays):
-  // b' = b - mu_t q - e_t (q^T mu - a mu_t). Only the robot's heading row and column change.
+void SeifStore::applyReanchor(const Vec3& q_x, double a, double dc_r) {
+  // invariant.hpp: H' = M^-T H M^-1 = H - q e_t^T - e_t q^T + a e_t e_t^T, and b as the same
+  // change of variables about mu (delta' = M delta, delta = x - mu):
+  //   b' = M^-T b + H' (I - M) mu = b + (H' - H) mu + (M^-T - I)(b - H mu)
+  //      = b - mu_t q - e_t (q^T mu - a mu_t + dc^T r),  r = b - H mu.
+  // When mu is the mean H and b hold (r = 0) the mean stays; when the amortised mean lags,
+  // the posterior moves only by dc (m_t - mu_t), not along the heading's covariance column by
+  // Sigma e_t dc^T r (the lag's residual fed into b). Only the heading row and column change.
   const double mu_t = mu_x_(2);
   double q_mu = q_x.dot(mu_x_);
   for (const auto& [slot, q] : reanchor_q_) q_mu += q.dot(mean(slot));
@@ -245,7 +259,7 @@ void SeifStore::applyReanchor(const Vec3& q_x, double a) {
   H_xx_.row(2) -= q_x.transpose();
   H_xx_(2, 2) += a;
   b_x_ -= mu_t * q_x;
-  b_x_(2) -= q_mu - a * mu_t;
+  b_x_(2) -= q_mu - a * mu_t + dc_r;
   for (const auto& [slot, q] : reanchor_q_) {
     RobotLink& l = robot_links_[static_cast<std::size_t>(activate(slot))];
     l.H.row(2) -= q.transpose();

@@ -240,8 +240,9 @@ class SeifStore {
   /// Links landmark `slot` to the robot (activates it) with a zero block; its position.
   int activate(int slot);
   /// The re-anchoring of reanchorRobot()/reanchorLandmark(): q = H dc over the variable's
-  /// blanket (q_x on the robot, q_ in reanchor_q_ on landmarks) and a = dc^T H dc.
-  void applyReanchor(const Vec3& q_x, double a);
+  /// blanket (q_x on the robot, q_ in reanchor_q_ on landmarks), a = dc^T H dc and
+  /// dc_r = dc^T (b - H mu), the residual on the re-anchored variable's position rows.
+  void applyReanchor(const Vec3& q_x, double a, double dc_r);
   /// Sets landmark `slot`'s mean (journaled; its term of g follows).
   void assignMean(int slot, const Vec2& mean);
   /// V_i beta for a landmark whose rigid motions are taken at `ref`.
