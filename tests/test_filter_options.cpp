@@ -97,10 +97,10 @@ TEST(FilterOptions, TheCanonicalSpecParsesBackToTheSameFilter) {
 TEST(FilterOptions, AProfileIsOverriddenByTheKeysAfterIt) {
   const FilterSpec s = seif::parseFilterSpec("seif:profile=consistent,active=8");
   EXPECT_EQ(s.linearization, seif::Linearization::Invariant);
-  EXPECT_EQ(s.iterations, 2);
+  EXPECT_EQ(s.iterations, 3);
   EXPECT_EQ(s.seif.active, 8);
   EXPECT_EQ(s.seif.coarse, seif::SeifOptions::Coarse::Rigid);
-  EXPECT_EQ(s.seif.relax, 30);
+  EXPECT_EQ(s.seif.relax, 40);
   EXPECT_EQ(seif::parseFilterSpec("seif:active=8,profile=consistent").seif.active, 30);
   EXPECT_THROW(seif::parseFilterSpec("seif:profile=fast"), seif::InvalidArgument);
   EXPECT_THROW(seif::parseFilterSpec("ekf:profile=consistent"), seif::InvalidArgument);

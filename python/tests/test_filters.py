@@ -171,7 +171,7 @@ def test_the_option_table_names_every_option_once():
     for row in rows:
         if row["profile"]:  # a shorthand for other options
             spec = seif.parse_filter_spec("seif:profile=" + row["choices"])
-            assert seif.canonical_filter_spec(spec).startswith("seif:linearization=invariant,iterations=2")
+            assert seif.canonical_filter_spec(spec).startswith("seif:linearization=invariant,iterations=3")
             continue
         owner = owners.get(row["filters"], seif.FilterSpec())
         assert hasattr(owner, row["attribute"]), row

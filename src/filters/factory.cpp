@@ -42,7 +42,7 @@ void applyProfile(FilterSpec& s, std::string_view v);
 const std::array<FilterOption, 22> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
      "a recommended configuration: consistent = "
-     "linearization=invariant,iterations=2,active=30,motion=deferred,coarse=rigid,relax=30 "
+     "linearization=invariant,iterations=3,active=30,motion=deferred,coarse=rigid,relax=40 "
      "(honest covariances in constant time; README)",
      &applyProfile, [](const FilterSpec&) { return std::string(); }},
     {"linearization", kAll, kChoice, "standard|fej|invariant|oc", 0, 0,

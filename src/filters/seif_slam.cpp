@@ -272,8 +272,8 @@ void SeifSlam::applyUpdate(std::span<const Observation> observations, const Meas
       // the last correction here, not at the next observation; relaxing them one by one
       // instead left MRCLAM's pose NEES at 33 against 21), later ones the robot alone and K
       // landmarks. Invariant: then the robot is re-anchored, as immediate motion re-anchors
-      // it (every update, after the relaxation: b' = b + (H' - H) mu needs the mean H and b
-      // hold), at its mean before the held controls, so their noise enters at a fresh anchor.
+      // it (every update, after the relaxation), at its mean before the held controls, so
+      // their noise enters at a fresh anchor.
       if (amortized) recoverMean(pending_controls_ <= 1);
       if (config_.linearization == Linearization::Invariant) {
         store_.reanchorRobot();
@@ -302,9 +302,9 @@ void SeifSlam::applyUpdate(std::span<const Observation> observations, const Meas
 }
 
 void SeifSlam::reanchor(std::span<const Observation> observations) {
-  // Before any of the step's information enters, while the mean is the one H and b hold:
-  // b' = b + (H' - H) mu keeps it (invariant.hpp). The robot every update; an observed
-  // landmark once it has moved more than options.reanchor from its anchor.
+  // Before any of the step's information enters (SeifStore::reanchorRobot: a change of
+  // variables about the running mean). The robot every update; an observed landmark once it
+  // has moved more than options.reanchor from its anchor.
   store_.reanchorRobot();
   for (const Observation& z : observations) {
     const int slot = book_.find(z.landmark);

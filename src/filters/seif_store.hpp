@@ -173,8 +173,9 @@ class SeifStore {
   /// The robot's motion moved its anchor with its mean (T(a + d) T(a)^-1 is the standard
   /// motion Jacobian whatever a).
   void moveRobotAnchor(const Vec2& d) { robot_anchor_ += d; }
-  /// Re-anchors the robot at its mean: H <- M^-T H M^-1, b <- b + (H' - H) mu with
-  /// M = I + J (mu_p - a_p) e_theta^T (invariant.hpp). Touches the robot and its links. O(active).
+  /// Re-anchors the robot at its mean: H <- M^-T H M^-1, b <- M^-T b + H' (I - M) mu with
+  /// M = I + J (mu_p - a_p) e_theta^T (invariant.hpp): the change of variables
+  /// delta' = M (x - mu), exact whether or not mu is H^-1 b. Touches the robot and its links. O(active).
   void reanchorRobot();
   /// The same for landmark `slot` (M = I + J (mu_l - a_l) e_theta^T over its rows): the
   /// robot's heading row gains the landmark's neighbours, which become active (linked to

@@ -53,10 +53,10 @@ std::span<const FilterOption> filterOptions();
 bool takesOption(std::string_view name, const FilterOption& option);
 
 /// profile=consistent, the recommended constant-time configuration (README, "Consistent in
-/// constant time"): linearization=invariant, iterations=2, active=30, motion=deferred, and the
-/// amortised mean with its coarse level (coarse=rigid) relaxing 30 landmarks a step.
+/// constant time"): linearization=invariant, iterations=3, active=30, motion=deferred, and the
+/// amortised mean with its coarse level (coarse=rigid) relaxing 40 landmarks a step.
 inline constexpr std::string_view kConsistentProfile =
-    "linearization=invariant,iterations=2,active=30,motion=deferred,coarse=rigid,relax=30";
+    "linearization=invariant,iterations=3,active=30,motion=deferred,coarse=rigid,relax=40";
 
 /// "name:key=value,..." with every option the filter takes, in table order: the exact
 /// configuration a spec ran with, as metrics.json records it; parses back to an equal spec.
