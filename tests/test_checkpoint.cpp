@@ -407,6 +407,20 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   EXPECT_TRUE(seif4_file->mean() == seif3->mean());
   EXPECT_TRUE(seif4_file->information() == seif3->information());
   EXPECT_EQ(dynamic_cast<const SeifSlam&>(*seif4_file).informationScale(), 1.0);
+  // Version 8 kept each active landmark's coarse row with its robot term; it loads with the
+  // term taken out of the rows and the sums, which then hold V^T (b - H mu) and V^T H V with
+  // the robot's terms added fresh, as a version-9 file's do.
+  for (const char* file : {"seif-coarse-v8.ckpt", "seif-coarse.ckpt"}) {
+    const auto f = load(root / "corpus" / "fuzz_checkpoint" / file);
+    const SeifStore& store = dynamic_cast<const SeifSlam&>(*f).store();
+    ASSERT_TRUE(store.coarse()) << file;
+    ASSERT_FALSE(store.robotLinks().empty()) << file;
+    const auto [g_kept, A_kept] = store.coarseSums();
+    const auto [g, A] = store.coarseSumsFromScratch();
+    const double scale = store.informationVector().norm() * (1.0 + store.mean().cwiseAbs().maxCoeff());
+    EXPECT_LT((g_kept - g).norm(), 1e-9 * scale) << file;
+    EXPECT_LT((A_kept - A).norm(), 1e-9 * A.norm()) << file;
+  }
 }
 #endif
 

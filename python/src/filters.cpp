@@ -281,6 +281,9 @@ void bindSlamFilter(py::module_& m) {
           "predict(input) then update(observations): one filter cycle.")
       .def("finish", &SlamFilter::finish, py::call_guard<py::gil_scoped_release>(),
            "Call once after the last step (the batch MAP solves here; a filter does nothing).")
+      .def("settle", &SlamFilter::settle, py::call_guard<py::gil_scoped_release>(),
+           "Bring the stored form up to date for queries (a SEIF with deferred motion applies the "
+           "controls it holds); the posterior does not change.")
       .def_property_readonly("smoother", &SlamFilter::smoother)
       .def_property_readonly("smoother_report", [](const SlamFilter& f) -> std::optional<SmootherReport> {
         if (const SmootherReport* r = f.smootherReport()) return *r;

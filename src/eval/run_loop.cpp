@@ -25,6 +25,10 @@ void runStep(SlamFilter& filter, const Step& step, std::size_t k, const std::vec
     seconds = secondsBetween(t0, t1);
     for (RunObserver* o : observers) o->afterPredict(filter, step, k, seconds);
     if (options.associate) {
+      // Held work the association's queries would otherwise do first is the filter's.
+      const auto t_settle = Clock::now();
+      if (!step.observations.empty()) filter.settle();
+      seconds += secondsBetween(t_settle, Clock::now());
       std::vector<Observation> observations = step.observations;
       options.associate(filter, step, k, observations);
       const auto t2 = Clock::now();

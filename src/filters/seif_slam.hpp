@@ -57,6 +57,7 @@ class SeifSlam final : public SlamFilter {
   FilterStats stats() const override;
   /// Applies the controls deferred motion holds (SeifOptions::Motion::Deferred).
   void finish() override { settleMotion(); }
+  void settle() override { settleMotion(); }
   std::size_t robotLinks() const override { return store_.robotLinks().size(); }
   std::size_t rejectedObservations() const override { return book_.rejected(); }
   std::size_t blocksTouched() const override { return store_.blocksTouched(); }

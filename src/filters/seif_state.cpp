@@ -177,6 +177,18 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
     n.coarse_dirty = true;
     s.coarse_dirty_.push_back(slot);
   }
+  if (in.version() == 8) {
+    // Version 8 kept an active landmark's row with its robot term H_jx V_x (and its share of
+    // the sums); they are now added fresh each step (SeifStore::robotCoarseTerms()).
+    for (const SeifStore::RobotLink& l : s.robot_links_) {
+      SeifStore::Node& n = s.nodes_[static_cast<std::size_t>(l.slot)];
+      const Mat23 HV = l.H.transpose() * s.coarse_Vx_;
+      n.w -= HV;
+      if (n.coarse_dirty) continue;  // its terms are out of the sums until the next settle
+      s.coarse_A_.noalias() -= s.landmarkBasis(n.ref).transpose() * HV;
+      s.coarse_g_.noalias() += HV.transpose() * s.mean(l.slot);
+    }
+  }
 }
 
 void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {

@@ -56,6 +56,16 @@ void SeifStore::commitTransaction() { journal_.open = false; }
 
 SeifStore::Node& SeifStore::write(int slot) {
   touchCoarse(slot);
+  return journal(slot);
+}
+
+void SeifStore::addToVector(int slot, const Vec2& db) {
+  Node& node = journal(slot);
+  node.b += db;
+  if (coarse_ && !node.coarse_dirty) coarse_g_.noalias() += landmarkBasis(node.ref).transpose() * db;
+}
+
+SeifStore::Node& SeifStore::journal(int slot) {
   Node& node = nodes_[static_cast<std::size_t>(slot)];
   Journal& j = journal_;
   if (j.open && node.journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
@@ -199,12 +209,11 @@ int SeifStore::addLandmark(int id, const Vec2& mu) {
 }
 
 int SeifStore::activate(int slot) {
+  if (node(slot).active >= 0) return node(slot).active;  // its robot link is robot_links_'s
   Node& node = write(slot);
-  if (node.active < 0) {
-    node.active = static_cast<int>(robot_links_.size());
-    robot_links_.push_back({slot, Mat32::Zero(), step_});
-    max_landmark_links_ = std::max(max_landmark_links_, node.links.size() + 1);
-  }
+  node.active = static_cast<int>(robot_links_.size());
+  robot_links_.push_back({slot, Mat32::Zero(), step_});
+  max_landmark_links_ = std::max(max_landmark_links_, node.links.size() + 1);
   return node.active;
 }
 
@@ -228,7 +237,7 @@ void SeifStore::reanchorRobot() {
 }
 
 void SeifStore::reanchorLandmark(int slot, const Vec2& to) {
-  Node& node = write(slot);
+  Node& node = journal(slot);  // its H and links stay: only the heading's row and b change
   const Vec2 dc = quarterTurn(to - node.anchor);
   node.anchor = to;
   if (dc.isZero(0.0)) return;
@@ -263,7 +272,7 @@ void SeifStore::applyReanchor(const Vec3& q_x, double a, double dc_r) {
   for (const auto& [slot, q] : reanchor_q_) {
     RobotLink& l = robot_links_[static_cast<std::size_t>(activate(slot))];
     l.H.row(2) -= q.transpose();
-    write(slot).b -= mu_t * q;
+    addToVector(slot, -mu_t * q);
   }
   blocks_touched_ += 1 + reanchor_q_.size();
 }

@@ -27,12 +27,16 @@ class SeifStore {
     Mat32 H;         // H_{x, landmark}
     long last_seen;  // step() of its last observation
   };
-  // The fields are ordered by when they are read. The first 64 bytes hold what a neighbour's
-  // visit reads (mu, active, gathered) with H; the next 64 what relaxing the node itself adds
-  // (b, links); the bound, used only with SeifOptions::bounds, and the coarse level's
-  // fields, used only with SeifOptions::coarse, come last. 240 bytes.
+  // The fields are ordered by when they are read. The first 48 bytes hold what a neighbour's
+  // visit reads (mu, ref: mean() is mu plus the frame offset at ref; active, gathered); with
+  // H and what relaxing the node itself adds (b, links) they fill the first 120; the bound,
+  // used only with SeifOptions::bounds, and the rest of the coarse level's fields, used only
+  // with SeifOptions::coarse, come last.
   struct Node {
     Vec2 mu = Vec2::Zero();
+    // The mean's coarse level (enableCoarse(); seif_store_coarse.cpp): where its rigid
+    // motions are taken (its mean when it entered).
+    Vec2 ref = Vec2::Zero();
     int active = -1;    // position in robotLinks(), or -1 when passive
     int gathered = -1;  // position in the local block while gather()/scatter() run, else -1
     long mean_journaled = -1;  // the transaction that saved its mean last
@@ -46,10 +50,8 @@ class SeifStore {
     /// An upper bound (Loewner order) on its marginal covariance under H, kept by the filter
     /// (seif_bounds.hpp: MarginalMode::Conservative); zero until its first sighting sets it.
     Mat2 bound = Mat2::Zero();
-    // The mean's coarse level (enableCoarse(); seif_store_coarse.cpp): where its rigid
-    // motions are taken (its mean when it entered), its row of H V, and whether that row is
-    // out of the sums until settleCoarse().
-    Vec2 ref = Vec2::Zero();
+    // The coarse level's row of H V without the robot term, and whether that row is out of
+    // the sums until settleCoarse().
     Mat23 w = Mat23::Zero();
     bool coarse_dirty = false;
   };
@@ -141,7 +143,8 @@ class SeifStore {
   // V_i = [I, J (ref_i - o)] per landmark, [I, J (mu_p - o); 0 0 1] for the robot), by the
   // Galerkin step alpha = (V^T H V)^-1 V^T (b - H mu), mu += V alpha. Both sums are kept in
   // O(1) per change: g = sum_i (V_i^T b_i - w_i^T mu_i) and A = sum_i V_i^T w_i with
-  // w_i = (H V)_i, each term a landmark's own. The map's share of V alpha is held as one
+  // w_i = (H V)_i without its robot term, each term a landmark's own; the robot's row and
+  // the active landmarks' robot terms, which move with V_x, are added fresh (O(active)). The map's share of V alpha is held as one
   // frame offset (mean()), not written into every landmark.
   /// Turns the coarse level on (an empty map, or sums recomputed: O(N)).
   void enableCoarse();
@@ -224,8 +227,14 @@ class SeifStore {
 
  private:
   friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
-  /// nodes_[slot] for a change: saved first when a transaction is open.
+  /// nodes_[slot] for a change: saved first when a transaction is open; its coarse terms
+  /// taken out until settleCoarse() (touchCoarse()).
   Node& write(int slot);
+  /// nodes_[slot] saved as write() does, its coarse terms left in: for a change of b alone,
+  /// addToVector().
+  Node& journal(int slot);
+  /// b_slot += db, its coarse term V^T b kept current (O(1), no row recomputed).
+  void addToVector(int slot, const Vec2& db);
   /// nodes_[slot].mu for a change (the relaxations' only write): its mean saved first.
   Vec2& writeMean(int slot);
   /// The value of link `index` of landmark `slot` for a change (write(slot) first): its value

@@ -33,11 +33,12 @@ Mat23 SeifStore::landmarkBasis(const Vec2& ref) const {
 }
 
 Mat23 SeifStore::coarseRow(int slot) const {
-  // w_i = H_ii V_i + sum_j H_ij V_j + H_ix V_x
+  // The map's part of (H V)_i: w_i = H_ii V_i + sum_j H_ij V_j. Its robot term H_ix V_x moves
+  // with the robot's mean every step; robotCoarseTerms() adds it fresh for the active
+  // landmarks, so a row is recomputed only when its own blocks change.
   const Node& n = node(slot);
   Mat23 w = n.H * landmarkBasis(n.ref);
   for (const Link& l : n.links) w.noalias() += l.H * landmarkBasis(node(l.slot).ref);
-  if (n.active >= 0) w.noalias() += robot_links_[static_cast<std::size_t>(n.active)].H.transpose() * coarse_Vx_;
   return w;
 }
 
@@ -79,11 +80,21 @@ void SeifStore::settleCoarse() {
 }
 
 void SeifStore::robotCoarseTerms(Vec3& g, Mat3& A) const {
-  // The robot's terms, fresh: w_x = H_xx V_x + sum_active H_xj V_j.
+  // The terms of the robot's links, fresh: the robot's row w_x = H_xx V_x + sum_active H_xj V_j,
+  // and each active landmark's robot term H_jx V_x (not in its kept row, coarseRow()):
+  //   V_x^T b_x - w_x^T mu_x + sum_j (V_j^T H_jx V_x - ...)  O(active).
   Mat3 w = H_xx_ * coarse_Vx_;
-  for (const RobotLink& l : robot_links_) w.noalias() += l.H * landmarkBasis(node(l.slot).ref);
-  g = coarse_Vx_.transpose() * b_x_ - w.transpose() * mu_x_;
-  A = coarse_Vx_.transpose() * w;
+  A.setZero();
+  g.setZero();
+  for (const RobotLink& l : robot_links_) {
+    const Mat23 V = landmarkBasis(node(l.slot).ref);
+    w.noalias() += l.H * V;
+    const Mat23 HV = l.H.transpose() * coarse_Vx_;  // H_jx V_x
+    A.noalias() += V.transpose() * HV;
+    g.noalias() -= HV.transpose() * mean(l.slot);
+  }
+  g.noalias() += coarse_Vx_.transpose() * b_x_ - w.transpose() * mu_x_;
+  A.noalias() += coarse_Vx_.transpose() * w;
 }
 
 void SeifStore::enableCoarse() {
@@ -107,9 +118,7 @@ void SeifStore::enableCoarse() {
 
 bool SeifStore::correctFrame() {
   if (!coarse_) return false;
-  // V_x moves with the robot: the active landmarks' rows hold it through H_ix. write()
-  // journals them (their w changes) and takes their terms out.
-  for (const RobotLink& l : robot_links_) write(l.slot);
+  // V_x moves with the robot; the terms that hold it are robotCoarseTerms()'s, fresh.
   coarse_Vx_ = robotBasis();
   settleCoarse();
   Vec3 g_x;
@@ -126,7 +135,7 @@ bool SeifStore::correctFrame() {
   mu_x_.noalias() += coarse_Vx_ * alpha;
   frame_ += alpha;
   coarse_g_.noalias() -= coarse_A_.transpose() * alpha;
-  blocks_touched_ += 1 + robot_links_.size();
+  blocks_touched_ += 1 + 2 * robot_links_.size();
   return true;
 }
 

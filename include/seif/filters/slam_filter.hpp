@@ -156,6 +156,10 @@ class SlamFilter {
   /// motion applies the controls it holds); a smoother (the batch MAP) solves here, and its
   /// estimates before finish() are only its initial guess.
   virtual void finish() {}
+  /// Brings the stored form up to date for queries without changing the posterior (a SEIF
+  /// with deferred motion applies the controls it holds); a query does it when needed. The
+  /// run loop calls it before association, so that this work is timed as the filter's.
+  virtual void settle() {}
   /// The smoothed pose of every step (the start pose first, then one per step), for a
   /// smoother after finish(); empty for a filter, whose trajectory is the pose after each step.
   virtual std::vector<Pose2> smoothedTrajectory() const { return {}; }
