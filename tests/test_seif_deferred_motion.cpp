@@ -6,6 +6,7 @@
 
 #include <seif/core/errors.hpp>
 #include "filters/seif_slam.hpp"
+#include <seif/eval/run_loop.hpp>
 #include <seif/filters/factory.hpp>
 
 #include <gtest/gtest.h>
@@ -227,6 +228,40 @@ TEST(DeferredMotion, FinishAppliesTheHeldControls) {
   EXPECT_EQ(deferred->stats().links, immediate->stats().links);
   EXPECT_EQ(deferred->stats().robot_links, immediate->stats().robot_links);
   EXPECT_LT((deferred->pose() - immediate->pose()).norm(), 1e-9);
+}
+
+TEST(DeferredMotion, SettleAppliesTheHeldControlsAndTheRunLoopSettlesBeforeAssociation) {
+  // settle() applies what is held and moves no estimate; the run loop calls it before the
+  // association hook of a step with observations (its time is then the filter's), not on a
+  // step without any (the controls stay held).
+  const test::Scenario s = withGaps(test::makeScenario(6, 40, 60, 4.0), 5);
+  auto f = makeFilter("seif:motion=deferred", s.start, test::configFor(s));
+  const SeifSlam& seif = dynamic_cast<const SeifSlam&>(*f);
+  for (std::size_t k = 0; k < 3; ++k) f->step(s.steps[k].u, s.steps[k].observations);
+  ASSERT_EQ(seif.heldControls(), 2u);  // steps 1 and 2 observe nothing
+  const Pose2 held = f->pose();
+  f->settle();
+  EXPECT_EQ(seif.heldControls(), 0u);
+  EXPECT_EQ(f->pose(), held);
+
+  auto run = makeFilter("seif:motion=deferred", s.start, test::configFor(s));
+  const SeifSlam& running = dynamic_cast<const SeifSlam&>(*run);
+  Dataset data;
+  data.steps = s.steps;
+  std::size_t observed = 0, blind = 0;
+  RunLoopOptions options;
+  options.associate = [&](const SlamFilter&, const Step& step, std::size_t k, std::vector<Observation>&) {
+    if (!step.observations.empty()) {
+      EXPECT_EQ(running.heldControls(), 0u) << "step " << k;
+      ++observed;
+    } else if (k > 0) {
+      EXPECT_GT(running.heldControls(), 0u) << "step " << k;
+      ++blind;
+    }
+  };
+  runLoop(*run, data, {}, options);
+  EXPECT_GT(observed, 5u);
+  EXPECT_GT(blind, 20u);
 }
 
 }  // namespace

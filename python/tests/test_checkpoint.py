@@ -67,6 +67,24 @@ def test_deferred_motion_pickles_with_its_held_controls(paper_world):
     np.testing.assert_array_equal(f.pose_covariance(), straight.pose_covariance())
 
 
+def test_settle_applies_the_held_controls_without_moving_the_posterior(paper_world):
+    """settle() applies the controls a deferred SEIF holds (what a query would do first); the
+    run continues to the same estimates as one never settled."""
+    data, world = paper_world
+    start, config = seif.start_pose(data), paper_config(world)
+    steps = [(step.u, step.observations if k % 3 == 0 else []) for k, step in enumerate(data.steps)]
+    straight = seif.make_filter("seif:profile=consistent,mean=exact", start, config)
+    settled = seif.make_filter("seif:profile=consistent,mean=exact", start, config)
+    for k, (u, z) in enumerate(steps):
+        straight.step(u, z)
+        settled.step(u, z)
+        if k % 3 == 2:  # two controls held
+            pose = settled.pose()
+            settled.settle()
+            np.testing.assert_array_equal(settled.pose(), pose)
+    np.testing.assert_allclose(settled.mean(), straight.mean(), atol=1e-6)
+
+
 def test_checkpoint_extras_and_errors(paper_world, tmp_path):
     data, world = paper_world
     f = seif.make_filter("seif", seif.start_pose(data), paper_config(world))

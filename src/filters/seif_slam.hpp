@@ -58,6 +58,8 @@ class SeifSlam final : public SlamFilter {
   /// Applies the controls deferred motion holds (SeifOptions::Motion::Deferred).
   void finish() override { settleMotion(); }
   void settle() override { settleMotion(); }
+  /// Motion::Deferred: the controls held since the last motion update (0 when settled).
+  std::size_t heldControls() const { return pending_controls_; }
   std::size_t robotLinks() const override { return store_.robotLinks().size(); }
   std::size_t rejectedObservations() const override { return book_.rejected(); }
   std::size_t blocksTouched() const override { return store_.blocksTouched(); }
