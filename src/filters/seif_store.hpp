@@ -144,8 +144,9 @@ class SeifStore {
   // Galerkin step alpha = (V^T H V)^-1 V^T (b - H mu), mu += V alpha. Both sums are kept in
   // O(1) per change: g = sum_i (V_i^T b_i - w_i^T mu_i) and A = sum_i V_i^T w_i with
   // w_i = (H V)_i without its robot term, each term a landmark's own; the robot's row and
-  // the active landmarks' robot terms, which move with V_x, are added fresh (O(active)). The map's share of V alpha is held as one
-  // frame offset (mean()), not written into every landmark.
+  // the active landmarks' robot terms, which move with V_x, are added fresh (O(active)).
+  // The map's share of V alpha is held as one frame offset (mean()), not written into every
+  // landmark.
   /// Turns the coarse level on (an empty map, or sums recomputed: O(N)).
   void enableCoarse();
   bool coarse() const { return coarse_; }

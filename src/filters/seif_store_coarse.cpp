@@ -80,9 +80,11 @@ void SeifStore::settleCoarse() {
 }
 
 void SeifStore::robotCoarseTerms(Vec3& g, Mat3& A) const {
-  // The terms of the robot's links, fresh: the robot's row w_x = H_xx V_x + sum_active H_xj V_j,
-  // and each active landmark's robot term H_jx V_x (not in its kept row, coarseRow()):
-  //   V_x^T b_x - w_x^T mu_x + sum_j (V_j^T H_jx V_x - ...)  O(active).
+  // The terms of the robot's links, fresh, O(active): the robot's row
+  // w_x = H_xx V_x + sum_j H_xj V_j, and each active landmark's robot term H_jx V_x (not in
+  // its kept row, coarseRow()):
+  //   g = V_x^T b_x - w_x^T mu_x - sum_j (H_jx V_x)^T mu_j,
+  //   A = V_x^T w_x + sum_j V_j^T H_jx V_x.
   Mat3 w = H_xx_ * coarse_Vx_;
   A.setZero();
   g.setZero();
