@@ -39,11 +39,12 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 // here is the one line a flag or a spec error shows.
 void applyProfile(FilterSpec& s, std::string_view v);
 
+// Initialised before kOptions (declaration order within this file), which views it.
+const std::string kProfileHelp = "a recommended configuration: consistent = " + std::string(kConsistentProfile) +
+                                 " (honest covariances in constant time; README)";
+
 const std::array<FilterOption, 22> kOptions = {{
-    {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0,
-     "a recommended configuration: consistent = "
-     "linearization=invariant,iterations=3,active=30,motion=deferred,coarse=rigid,relax=40 "
-     "(honest covariances in constant time; README)",
+    {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0, kProfileHelp,
      &applyProfile, [](const FilterSpec&) { return std::string(); }},
     {"linearization", kAll, kChoice, "standard|fej|invariant|oc", 0, 0,
      "the Jacobians: at the newest estimates, at the first ones (FEJ), the right-invariant EKF's, "
