@@ -1,4 +1,5 @@
 #include <seif/core/errors.hpp>
+#include "core/small_llt.hpp"
 #include "filters/information_ops.hpp"
 #include "filters/invariant.hpp"
 #include <seif/filters/slam_filter.hpp>
@@ -324,7 +325,7 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
       H.block(offset[c], offset[a], dc, da) = B.transpose();
     }
   }
-  const Eigen::LLT<Eigen::MatrixXd> llt(H);
+  const SmallLLT<Eigen::MatrixXd> llt(H);
   if (llt.info() != Eigen::Success) {
     throw NumericError(filter + ": the information of a Markov blanket is not positive definite");
   }

@@ -29,9 +29,9 @@ class SeifStore {
   };
   // The fields are ordered by when they are read. The first 48 bytes hold what a neighbour's
   // visit reads (mu, ref: mean() is mu plus the frame offset at ref; active, gathered); with
-  // H and what relaxing the node itself adds (b, links) they fill the first 120; the bound,
-  // used only with SeifOptions::bounds, and the rest of the coarse level's fields, used only
-  // with SeifOptions::coarse, come last.
+  // H and what relaxing the node itself adds (b, links) they fill the first 120, and with the
+  // coarse level's row (relaxLandmark() reads it with SeifOptions::coarse) the first 176;
+  // the bound, used only with SeifOptions::bounds, comes last.
   struct Node {
     Vec2 mu = Vec2::Zero();
     // The mean's coarse level (enableCoarse(); seif_store_coarse.cpp): where its rigid
@@ -43,6 +43,10 @@ class SeifStore {
     Mat2 H = Mat2::Zero();
     Vec2 b = Vec2::Zero();
     std::vector<Link> links;
+    // The coarse level's row of H V without the robot term, and whether that row is out of
+    // the sums until settleCoarse().
+    Mat23 w = Mat23::Zero();
+    bool coarse_dirty = false;
     long journaled = -1;  // the transaction that saved it whole last (beginTransaction())
     /// Where H is anchored for this landmark (Linearization::Invariant; src/filters/invariant.hpp):
     /// its mean when it entered or was last re-anchored.
@@ -50,10 +54,6 @@ class SeifStore {
     /// An upper bound (Loewner order) on its marginal covariance under H, kept by the filter
     /// (seif_bounds.hpp: MarginalMode::Conservative); zero until its first sighting sets it.
     Mat2 bound = Mat2::Zero();
-    // The coarse level's row of H V without the robot term, and whether that row is out of
-    // the sums until settleCoarse().
-    Mat23 w = Mat23::Zero();
-    bool coarse_dirty = false;
   };
 
   /// A map without landmarks: the robot's information H_xx at mean mu_x (b_x = H_xx mu_x).
@@ -215,16 +215,19 @@ class SeifStore {
     solveLocalMean();
   }
   /// Starts fetching landmark `slot`'s node into the cache (round 1 of relaxLandmarks()).
-  void prefetch(int slot) const {  // its first 128 bytes: all but the bound (Node)
+  void prefetch(int slot) const {  // its first 176 bytes: what relaxLandmark() reads (Node)
     const char* p = reinterpret_cast<const char*>(&nodes_[static_cast<std::size_t>(slot)]);
     __builtin_prefetch(p);
     __builtin_prefetch(p + 64);
-    __builtin_prefetch(p + 127);
+    __builtin_prefetch(p + 128);
+    if (coarse_) __builtin_prefetch(p + 175);
   }
   /// relaxLandmark() of each of `slots` (prefetched), in order. Each relaxation chases three
   /// dependent pointers: node, links, neighbours' means. Their memory is prefetched first,
   /// round by round, so that the cache misses of the slots overlap instead of adding up.
+  /// When the map fits in the caches (cacheResident()) the prefetches are skipped.
   void relaxLandmarks(std::span<const int> slots);
+  bool cacheResident() const;
 
  private:
   friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
