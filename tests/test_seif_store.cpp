@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 namespace {
@@ -223,6 +224,49 @@ TEST(SeifStore, JointSolveOfTheActiveBlock) {
   EXPECT_LT(r.head(StateLayout::landmark(2)).norm(), 1e-12 * b.norm());
   EXPECT_LT(r.tail(r.size() - StateLayout::landmark(3)).norm(), 1e-12 * b.norm());
   EXPECT_GT(r.segment<2>(StateLayout::landmark(2)).norm(), 1e-3);
+}
+
+TEST(SeifStore, TheIteratedUpdatesBlockStaysTheStoresAndReordersAsAGather) {
+  // The iterated update gathers once: addObservationInBlock() changes the store and the block
+  // alike, solveLocalMean(Reuse) keeps the passive terms, reorderGathered() permutes the block.
+  Fixture f(6, 7);
+  std::mt19937_64 rng(9);
+  f.store.removeRobotLink(2);  // passive, linked to active 1
+  f.store.removeRobotLink(3);  // passive, linked to active 0
+  Eigen::VectorXd mu(f.b.size());
+  std::normal_distribution<double> n01;
+  for (Eigen::Index i = 0; i < mu.size(); ++i) mu(i) = n01(rng);
+  f.store.setMean(mu);
+  f.store.gatherActive();
+  EXPECT_THROW(f.store.solveLocalMean(SeifStore::Passive::Reuse), std::logic_error);  // nothing to reuse yet
+  f.store.solveLocalMean(SeifStore::Passive::Recompute);
+  const std::vector<int> block(f.store.gathered().begin(), f.store.gathered().end());
+  const auto [dH, db] = randomInformation(rng);
+  f.store.addObservationInBlock(block[1], dH, db);
+  EXPECT_THROW(f.store.addObservationInBlock(2, dH, db), std::logic_error);  // passive: outside
+  const LocalMatrix H_kept = f.store.localH();
+  const LocalVector b_kept = f.store.localB();
+  f.store.solveLocalMean(SeifStore::Passive::Reuse);
+  const Eigen::VectorXd mean_kept = f.store.mean();
+  // A fresh gather of the same store: the same block, bit for bit, and the same solution.
+  f.store.gatherActive();
+  EXPECT_EQ(f.store.localH(), H_kept);
+  EXPECT_EQ(f.store.localB(), b_kept);
+  f.store.solveLocalMean(SeifStore::Passive::Recompute);
+  EXPECT_LT((f.store.mean() - mean_kept).norm(), 1e-12 * mean_kept.norm());
+  // Reordered: as gathered in that order.
+  std::vector<int> reversed(block.rbegin(), block.rend());
+  f.store.reorderGathered(reversed);
+  const LocalMatrix H_reordered = f.store.localH();
+  const LocalVector b_reordered = f.store.localB();
+  f.store.solveLocalMean(SeifStore::Passive::Reuse);
+  const Eigen::VectorXd mean_reordered = f.store.mean();
+  f.store.gather(reversed);
+  EXPECT_EQ(f.store.localH(), H_reordered);
+  EXPECT_EQ(f.store.localB(), b_reordered);
+  f.store.solveLocalMean(SeifStore::Passive::Recompute);
+  EXPECT_LT((f.store.mean() - mean_reordered).norm(), 1e-12 * mean_reordered.norm());
+  EXPECT_THROW(f.store.reorderGathered(std::vector<int>{0, 1}), std::logic_error);  // other landmarks
 }
 
 TEST(SeifStore, RejectsABlockLargerThanTheLocalBuffers) {

@@ -210,17 +210,22 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   // anchors; a first sighting keeps the linearisation that initialised its landmark. Not
   // after a sparsification within the batch (it has conditioned the links the first
   // linearisation made).
+  // The block is gathered once: a relinearisation changes only blocks inside it (the robot's,
+  // the observed landmarks', their robot links), which addObservationInBlock() applies to the
+  // store and the block alike, and the links to the passive landmarks are summed once.
   for (int it = 1; it < config_.iterations && sparsifications_ == sparsified; ++it) {
-    store_.relaxActive();
+    if (it == 1) store_.gatherActive();
+    store_.solveLocalMean(it == 1 ? SeifStore::Passive::Recompute : SeifStore::Passive::Reuse);
     const Pose2 xi = store_.robotMean();
     for (std::size_t k = 0; k < plan.size(); ++k) {
       const PlannedObservation& p = plan[k];
       if (p.first) continue;
-      store_.addObservation(p.slot, -infos_[k].H, -infos_[k].b);
+      store_.addObservationInBlock(p.slot, -infos_[k].H, -infos_[k].b);
       infos_[k] = measurementInformation(sensor, xi, store_.mean(p.slot), *p.z, scaledNoiseInverse(sensor, *p.z),
                                          p.jacobian_landmark, anchors_[k], p.constraint);
-      store_.addObservation(p.slot, infos_[k].H, infos_[k].b);
+      store_.addObservationInBlock(p.slot, infos_[k].H, infos_[k].b);
     }
+    block_current_ = true;
   }
   // Every bound tightened by the step's information (C^-1 + I)^-1, unless a sparsification
   // within the batch changed the robot's conditional between the prior and the information.
@@ -289,10 +294,13 @@ void SeifSlam::applyUpdate(std::span<const Observation> observations, const Meas
     eseifUpdate(observations, sensor);
     return;
   }
+  block_current_ = false;
   measurementUpdate(observations, sensor);
   if (!amortized) {
+    block_current_ = false;
     recoverExactMean();  // sparsification then keeps this mean exactly
   } else if (!book_order) {
+    block_current_ = false;
     recoverMean();
   }
   // With the book's order the measurements have just moved the mean of the robot and the

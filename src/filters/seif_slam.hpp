@@ -233,6 +233,9 @@ class SeifSlam final : public SlamFilter {
   LocalMatrix overclaim_h_;          // and its information before eq. (44-51)
   LocalGauge gauge_;                 // the block's free directions (keepGauge)
   BoundWorkspace bound_ws_;
+  // measurementUpdate()'s iterations left the store's gathered block holding the active set,
+  // current (SeifStore::reorderGathered()); any other change to the store clears it.
+  bool block_current_ = false;
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
 
   /// The sparse Cholesky factor of H and its selected inverse, built on first use after H

@@ -39,8 +39,16 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
   for (int i = 0; i < drop; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y0
   const bool conservative = options_.sparsify == SeifOptions::Sparsify::Conservative;
   if (conservative) beginConservativeSparsification();
-  store_.gather(order_);
-  if (solve_active_mean_first) store_.solveLocalMean();
+  // The iterated update left the active block gathered and current (measurementUpdate()):
+  // reordered, not read again, with its passive terms.
+  const bool reuse = solve_active_mean_first && block_current_ && slot < 0;
+  block_current_ = false;
+  if (reuse) {
+    store_.reorderGathered(order_);
+  } else {
+    store_.gather(order_);
+  }
+  if (solve_active_mean_first) store_.solveLocalMean(reuse ? SeifStore::Passive::Reuse : SeifStore::Passive::Recompute);
   LocalMatrix& H = store_.localH();
   if (conservative) overclaim_h_ = H;
   if (options_.gauge == SeifOptions::Gauge::Kept) {

@@ -220,6 +220,24 @@ int SeifStore::activate(int slot) {
 
 namespace {
 Vec2 quarterTurn(const Vec2& v) { return Vec2(-v.y(), v.x()); }
+
+/// sum over `links` of H_ij m(j), in four interleaved partial sums: with one running sum
+/// each link's additions wait for the previous link's (a relaxation's ~130 links are then
+/// bound by the adder's latency, not its throughput).
+template <typename MeanOf>
+Vec2 linkSum(const std::vector<SeifStore::Link>& links, const MeanOf& m) {
+  Vec2 s0 = Vec2::Zero(), s1 = Vec2::Zero(), s2 = Vec2::Zero(), s3 = Vec2::Zero();
+  const std::size_t n = links.size();
+  std::size_t e = 0;
+  for (; e + 4 <= n; e += 4) {
+    s0.noalias() += links[e].H * m(links[e].slot);
+    s1.noalias() += links[e + 1].H * m(links[e + 1].slot);
+    s2.noalias() += links[e + 2].H * m(links[e + 2].slot);
+    s3.noalias() += links[e + 3].H * m(links[e + 3].slot);
+  }
+  for (; e < n; ++e) s0.noalias() += links[e].H * m(links[e].slot);
+  return (s0 + s1) + (s2 + s3);
+}
 }  // namespace
 
 void SeifStore::reanchorRobot() {
@@ -466,7 +484,53 @@ void SeifStore::gatherActive() {
   gatherListed();
 }
 
+void SeifStore::reorderGathered(std::span<const int> slots) {
+  const auto k = static_cast<Eigen::Index>(gathered_.size());
+  if (static_cast<Eigen::Index>(slots.size()) != k) throw std::logic_error("SeifStore::reorderGathered: other landmarks");
+  // rows[i]: where slots[i] sits in the gathered block now
+  std::array<Eigen::Index, kMaxLocalDim> rows{};
+  for (Eigen::Index r = 0; r < 3; ++r) rows[static_cast<std::size_t>(r)] = r;
+  for (Eigen::Index i = 0; i < k; ++i) {
+    const auto at = std::find(gathered_.begin(), gathered_.end(), slots[static_cast<std::size_t>(i)]);
+    if (at == gathered_.end()) throw std::logic_error("SeifStore::reorderGathered: other landmarks");
+    const auto from = 3 + 2 * static_cast<Eigen::Index>(at - gathered_.begin());
+    rows[static_cast<std::size_t>(3 + 2 * i)] = from;
+    rows[static_cast<std::size_t>(4 + 2 * i)] = from + 1;
+  }
+  const Eigen::Index n = 3 + 2 * k;
+  const auto order = std::span<const Eigen::Index>(rows.data(), static_cast<std::size_t>(n));
+  local_rhs_ = local_b_;
+  for (Eigen::Index r = 0; r < n; ++r) local_b_(r) = local_rhs_(order[static_cast<std::size_t>(r)]);
+  local_rhs_ = local_mu_;
+  for (Eigen::Index r = 0; r < n; ++r) local_mu_(r) = local_rhs_(order[static_cast<std::size_t>(r)]);
+  if (passive_current_) {
+    local_rhs_ = local_passive_;
+    for (Eigen::Index r = 0; r < n; ++r) local_passive_(r) = local_rhs_(order[static_cast<std::size_t>(r)]);
+  }
+  const LocalMatrix H = local_H_;
+  for (Eigen::Index c = 0; c < n; ++c) {
+    for (Eigen::Index r = 0; r < n; ++r) local_H_(r, c) = H(order[static_cast<std::size_t>(r)], order[static_cast<std::size_t>(c)]);
+  }
+  gathered_.assign(slots.begin(), slots.end());
+}
+
+void SeifStore::addObservationInBlock(int slot, const Eigen::Matrix<double, 5, 5>& H,
+                                      const Eigen::Matrix<double, 5, 1>& b) {
+  const auto at = std::find(gathered_.begin(), gathered_.end(), slot);
+  if (at == gathered_.end()) throw std::logic_error("SeifStore::addObservationInBlock: a landmark outside the block");
+  addObservation(slot, H, b);
+  // The same sums on the block's copies (gatherListed() copied them from the store).
+  const auto r = 3 + 2 * static_cast<Eigen::Index>(at - gathered_.begin());
+  local_H_.topLeftCorner<3, 3>() += H.topLeftCorner<3, 3>();
+  local_b_.head<3>() += b.head<3>();
+  local_H_.block<2, 2>(r, r) += H.bottomRightCorner<2, 2>();
+  local_b_.segment<2>(r) += b.tail<2>();
+  local_H_.block<3, 2>(0, r) += H.topRightCorner<3, 2>();
+  local_H_.block<2, 3>(r, 0) = local_H_.block<3, 2>(0, r).transpose();
+}
+
 void SeifStore::gatherListed() {
+  passive_current_ = false;
   const int k = static_cast<int>(gathered_.size());
   if (k > kMaxLocalLandmarks) {
     throw InvalidArgument("seif: a local block holds at most " + std::to_string(kMaxLocalLandmarks) +
@@ -562,9 +626,9 @@ void SeifStore::relaxLandmark(int slot) {
     // sum_j H_ij (mu_j + V_j beta) = sum_j H_ij mu_j + (w_i - H_ii V_i) beta with the kept
     // row w_i = H_ii V_i + sum_j H_ij V_j (seif_store_coarse.cpp): the links read mu alone.
     rhs.noalias() -= (node.w - node.H * landmarkBasis(node.ref)) * frame_;
-    for (const Link& l : node.links) rhs.noalias() -= l.H * nodes_[static_cast<std::size_t>(l.slot)].mu;
+    rhs -= linkSum(node.links, [this](int j) -> const Vec2& { return nodes_[static_cast<std::size_t>(j)].mu; });
   } else {
-    for (const Link& l : node.links) rhs.noalias() -= l.H * mean(l.slot);
+    rhs -= linkSum(node.links, [this](int j) { return mean(j); });
   }
   if (node.active >= 0) {
     rhs.noalias() -= robot_links_[static_cast<std::size_t>(node.active)].H.transpose() * mu_x_;
@@ -604,22 +668,24 @@ void SeifStore::relaxLandmarks(std::span<const int> slots) {
   for (int s : slots) relaxLandmark(s);
 }
 
-void SeifStore::solveLocalMean() {
+void SeifStore::solveLocalMean(Passive passive) {
   // Block Gauss-Seidel on the gathered variables L jointly (eq. 42 with S_i the projection
   // onto L): mu_L = H_LL^-1 (b_L - H_{L,rest} mu_rest). With every active landmark in L the
   // robot is linked only inside L; each landmark's links to passive ones go to the right.
-  local_rhs_ = local_b_;
-  for (std::size_t i = 0; i < gathered_.size(); ++i) {
-    const Node& n = node(gathered_[i]);
-    const auto row = 3 + 2 * static_cast<Eigen::Index>(i);
-    Vec2 rhs = local_rhs_.segment<2>(row);  // summed in a register, in the links' order
-    for (const Link& l : n.links) {
-      const Node& other = node(l.slot);
-      if (other.active < 0) rhs.noalias() -= l.H * mean(l.slot);
-    }
-    local_rhs_.segment<2>(row) = rhs;
-    blocks_touched_ += n.links.size();
+  if (passive == Passive::Reuse && !passive_current_) {
+    throw std::logic_error("SeifStore::solveLocalMean: no passive terms of this block to reuse");
   }
+  if (passive == Passive::Recompute || !passive_current_) {
+    local_passive_.setZero(local_b_.size());
+    for (std::size_t i = 0; i < gathered_.size(); ++i) {
+      const Node& n = node(gathered_[i]);
+      local_passive_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i)) =
+          linkSum(n.links, [this](int j) { return node(j).active < 0 ? mean(j) : Vec2(Vec2::Zero()); });
+      blocks_touched_ += n.links.size();
+    }
+    passive_current_ = true;
+  }
+  local_rhs_ = local_b_ - local_passive_;
   const SmallLLT<LocalMatrix> llt(local_H_);
   if (llt.info() != Eigen::Success) {
     throw NumericError("seif: the information of the robot and its active landmarks is not "

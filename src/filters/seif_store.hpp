@@ -194,6 +194,10 @@ class SeifStore {
   void gather(std::span<const int> slots);
   /// gather() of the robot and the active landmarks, in robotLinks() order.
   void gatherActive();
+  /// The gathered block put in the order `slots` (the same landmarks) without reading the
+  /// store, with the passive terms of the last solveLocalMean(). Valid only while the store
+  /// has changed since the gather through addObservationInBlock() and solveLocalMean() alone.
+  void reorderGathered(std::span<const int> slots);
   /// Writes the gathered block back: H, b, mu, the robot links of active landmarks, and
   /// links among the landmarks (creating those that became non-zero: motion, paper fig. 4).
   void scatter();
@@ -208,7 +212,13 @@ class SeifStore {
   /// Solves the gathered block's mean jointly, its links to the rest on the right-hand
   /// side. The block must hold exactly the active landmarks (in any order): the robot's
   /// links then all lie inside it, and the landmarks' links to passive ones outside.
-  void solveLocalMean();
+  /// Passive::Reuse takes the block's links to the passive landmarks, sum_j H_ij mu_j, from
+  /// the last solve on this block: valid while neither those links nor the passive means
+  /// have changed (the iterated update, between its relinearisations).
+  enum class Passive { Recompute, Reuse };
+  void solveLocalMean(Passive passive = Passive::Recompute);
+  /// addObservation() on the store and on the gathered block, which holds `slot`.
+  void addObservationInBlock(int slot, const Eigen::Matrix<double, 5, 5>& H, const Eigen::Matrix<double, 5, 1>& b);
   /// gatherActive(); solveLocalMean().
   void relaxActive() {
     gatherActive();
@@ -293,6 +303,8 @@ class SeifStore {
   LocalVector local_b_;
   LocalVector local_mu_;
   LocalVector local_rhs_;
+  LocalVector local_passive_;     // sum over passive j of H_ij mu_j, per gathered row (solveLocalMean)
+  bool passive_current_ = false;  // local_passive_ holds the gathered block's, in its order
   std::vector<std::pair<int, Vec2>> reanchor_q_;  // applyReanchor()'s landmark entries
 
   // The coarse level (above): the map's frame offset beta, the origin o of the rotations,
