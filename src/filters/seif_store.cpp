@@ -572,13 +572,30 @@ void SeifStore::scatter() {
   H_xx_ = local_H_.topLeftCorner<3, 3>();
   b_x_ = local_b_.head<3>();
   mu_x_ = local_mu_.head<3>();
+  // The coarse level: a row that is exact before the scatter (its terms in the sums) changes
+  // only by the blocks written here, dw_i = dH_ii V_i + sum_j dH_ij V_j over the gathered j;
+  // it is updated by that and put back in the sums at the end, not recomputed from its links.
+  std::array<bool, kMaxLocalLandmarks> row_kept{};
+  std::array<Mat23, kMaxLocalLandmarks> basis;
+  std::array<Mat23, kMaxLocalLandmarks> row_change;
+  if (coarse_) {
+    for (int i = 0; i < k; ++i) {
+      const Node& n = node(gathered_[static_cast<std::size_t>(i)]);
+      const auto a = static_cast<std::size_t>(i);
+      row_kept[a] = !n.coarse_dirty;
+      basis[a] = landmarkBasis(n.ref);
+      row_change[a].setZero();
+    }
+  }
   // Each pair's block is written from the upper triangle (i < j), H_{c,a} as its transpose.
   std::array<std::bitset<kMaxLocalLandmarks>, kMaxLocalLandmarks> linked{};
   {
     const GatheredMarks marks(*this);
     for (int i = 0; i < k; ++i) {
-      Node& node = write(gathered_[static_cast<std::size_t>(i)]);
+      const auto a = static_cast<std::size_t>(i);
+      Node& node = write(gathered_[a]);
       const int r = 3 + 2 * i;
+      if (row_kept[a]) row_change[a].noalias() += (local_H_.block<2, 2>(r, r) - node.H) * basis[a];
       node.H = local_H_.block<2, 2>(r, r);
       node.b = local_b_.segment<2>(r);
       node.mu = storedMean(local_mu_.segment<2>(r), node.ref);
@@ -587,19 +604,41 @@ void SeifStore::scatter() {
         const int j = nodes_[static_cast<std::size_t>(node.links[e].slot)].gathered;
         if (j < 0) continue;
         linked[static_cast<std::size_t>(std::min(i, j))].set(static_cast<std::size_t>(std::max(i, j)));
-        writeLink(gathered_[static_cast<std::size_t>(i)], e) =
+        const Mat2 H_ij =
             i < j ? Mat2(local_H_.block<2, 2>(r, 3 + 2 * j)) : Mat2(local_H_.block<2, 2>(3 + 2 * j, r).transpose());
+        Mat2& stored = writeLink(gathered_[a], e);
+        if (row_kept[a]) row_change[a].noalias() += (H_ij - stored) * basis[static_cast<std::size_t>(j)];
+        stored = H_ij;
       }
     }
   }
   for (int i = 0; i < k; ++i) {  // motion creates links among the active landmarks (paper fig. 4)
     for (int j = i + 1; j < k; ++j) {
-      if (linked[static_cast<std::size_t>(i)].test(static_cast<std::size_t>(j))) continue;
+      const auto a = static_cast<std::size_t>(i), c = static_cast<std::size_t>(j);
+      if (linked[a].test(c)) continue;
       const Mat2 block = local_H_.block<2, 2>(3 + 2 * i, 3 + 2 * j);
       if (block.cwiseAbs().maxCoeff() > 0.0) {
-        addToLink(gathered_[static_cast<std::size_t>(i)], gathered_[static_cast<std::size_t>(j)], block);
+        addToLink(gathered_[a], gathered_[c], block);
+        if (row_kept[a]) row_change[a].noalias() += block * basis[c];
+        if (row_kept[c]) row_change[c].noalias() += block.transpose() * basis[a];
       }
     }
+  }
+  if (coarse_) {
+    for (int i = 0; i < k; ++i) {
+      const auto a = static_cast<std::size_t>(i);
+      if (!row_kept[a]) continue;
+      Node& n = nodes_[static_cast<std::size_t>(gathered_[a])];
+      n.w += row_change[a];
+      Vec3 g;
+      Mat3 A;
+      coarseTerms(gathered_[a], n.w, g, A);
+      coarse_g_ += g;
+      coarse_A_ += A;
+      n.coarse_dirty = false;
+    }
+    // Settled here: out of the list (a later write lists them again).
+    std::erase_if(coarse_dirty_, [this](int slot) { return !nodes_[static_cast<std::size_t>(slot)].coarse_dirty; });
   }
   blocks_touched_ += static_cast<std::size_t>((k + 1) * (k + 1));
 }
