@@ -16,6 +16,10 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
   // §4, paper eq. (44-51): deactivate the surplus Y0, keep Y+.
   const int k = static_cast<int>(store_.robotLinks().size());
   const int drop = slot >= 0 ? 1 : k - options_.active;
+  // The iterated update left the active block gathered and current (measurementUpdate()):
+  // reordered below, not read again, with its passive terms.
+  const bool reuse = solve_active_mean_first && block_current_ && slot < 0;
+  block_current_ = false;
   if (drop <= 0) return;
   ++sparsifications_;
   if (options_.sparsify == SeifOptions::Sparsify::Eseif && slot < 0) ++eseif_fallbacks_;
@@ -39,10 +43,6 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
   for (int i = 0; i < drop; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y0
   const bool conservative = options_.sparsify == SeifOptions::Sparsify::Conservative;
   if (conservative) beginConservativeSparsification();
-  // The iterated update left the active block gathered and current (measurementUpdate()):
-  // reordered, not read again, with its passive terms.
-  const bool reuse = solve_active_mean_first && block_current_ && slot < 0;
-  block_current_ = false;
   if (reuse) {
     store_.reorderGathered(order_);
   } else {
