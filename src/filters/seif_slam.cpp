@@ -155,7 +155,7 @@ Mat2 SeifSlam::scaledNoiseInverse(const MeasurementModel& sensor, const Observat
   return information_scale_ == 1.0 ? R_inv : Mat2(information_scale_ * R_inv);  // the store holds kappa H
 }
 
-void SeifSlam::measurementUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
+bool SeifSlam::measurementUpdate(std::span<const Observation> observations, const MeasurementModel& sensor) {
   invalidateFactor();
   // §3, paper eq. (21-22): every observation linearised at the current mean (with FEJ:
   // each landmark's Jacobians at its first estimate, Huang et al. 2010, the FEJ-EKF). A new
@@ -213,6 +213,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   // The block is gathered once: a relinearisation changes only blocks inside it (the robot's,
   // the observed landmarks', their robot links), which addObservationInBlock() applies to the
   // store and the block alike, and the links to the passive landmarks are summed once.
+  bool block_gathered = false;
   for (int it = 1; it < config_.iterations && sparsifications_ == sparsified; ++it) {
     if (it == 1) store_.gatherActive();
     store_.solveLocalMean(it == 1 ? SeifStore::Passive::Recompute : SeifStore::Passive::Reuse);
@@ -225,7 +226,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
                                          p.jacobian_landmark, anchors_[k], p.constraint);
       store_.addObservationInBlock(p.slot, infos_[k].H, infos_[k].b);
     }
-    block_current_ = true;
+    block_gathered = true;
   }
   // Every bound tightened by the step's information (C^-1 + I)^-1, unless a sparsification
   // within the batch changed the robot's conditional between the prior and the information.
@@ -258,6 +259,7 @@ void SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
     tightenBounds(store_, bound_slots_, bound_prior_, bound_added_);
   }
   book_.commit();
+  return block_gathered;
 }
 
 void SeifSlam::update(std::span<const Observation> observations, const MeasurementModel& sensor) {
@@ -294,19 +296,16 @@ void SeifSlam::applyUpdate(std::span<const Observation> observations, const Meas
     eseifUpdate(observations, sensor);
     return;
   }
-  block_current_ = false;
-  measurementUpdate(observations, sensor);
+  const bool block_gathered = measurementUpdate(observations, sensor);
   if (!amortized) {
-    block_current_ = false;
     recoverExactMean();  // sparsification then keeps this mean exactly
   } else if (!book_order) {
-    block_current_ = false;
     recoverMean();
   }
   // With the book's order the measurements have just moved the mean of the robot and the
   // active landmarks, and the sparsification's b~ = b + (H~ - H) mu is right only for their
   // exact mean: it re-solves that block first, on the block it gathers anyway.
-  deactivateSurplus(amortized && book_order);
+  deactivateSurplus(amortized && book_order, -1, amortized && book_order && block_gathered);
 }
 
 void SeifSlam::reanchor(std::span<const Observation> observations) {

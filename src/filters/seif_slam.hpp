@@ -145,8 +145,9 @@ class SeifSlam final : public SlamFilter {
   /// (updates without observations while motion is deferred, after the first).
   void recoverMean(bool with_active = true);
   void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
-  void measurementUpdate(std::span<const Observation> z,
-                         const MeasurementModel& sensor);  ///< §3, eq. (21-22)
+  /// §3, eq. (21-22). Returns whether its iterations left the store's gathered block
+  /// holding the active set, current (deactivateSurplus() can then reorder it).
+  bool measurementUpdate(std::span<const Observation> z, const MeasurementModel& sensor);
   /// R^-1 of z, times kappa (informationScale()): the information it adds to the store.
   Mat2 scaledNoiseInverse(const MeasurementModel& sensor, const Observation& z) const;
   void sparsify();                                         ///< §4, eq. (44-51)
@@ -156,8 +157,10 @@ class SeifSlam final : public SlamFilter {
   Eigen::MatrixXd localCovariance(std::span<const int> vars, bool conservative = false) const;
   Eigen::MatrixXd localCovariance(std::initializer_list<int> vars, bool conservative = false) const;
   /// sparsify(), optionally re-solving the gathered block's mean before eq. (44-51).
-  /// With `slot` >= 0 (an active landmark), deactivates that landmark alone.
-  void deactivateSurplus(bool solve_active_mean_first, int slot = -1);
+  /// With `slot` >= 0 (an active landmark), deactivates that landmark alone. With
+  /// `block_gathered` (measurementUpdate()'s result, nothing changed since) the gathered
+  /// block is reordered instead of read again (SeifStore::reorderGathered()).
+  void deactivateSurplus(bool solve_active_mean_first, int slot = -1, bool block_gathered = false);
   /// Gauge::Kept: the free directions of the block deactivateSurplus() gathered (gauge_).
   void gatherGauge(int drop);
   /// update() with Sparsify::Eseif (Walter, Eustice, Leonard 2007).
@@ -233,9 +236,6 @@ class SeifSlam final : public SlamFilter {
   LocalMatrix overclaim_h_;          // and its information before eq. (44-51)
   LocalGauge gauge_;                 // the block's free directions (keepGauge)
   BoundWorkspace bound_ws_;
-  // measurementUpdate()'s iterations left the store's gathered block holding the active set,
-  // current (SeifStore::reorderGathered()); any other change to the store clears it.
-  bool block_current_ = false;
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
 
   /// The sparse Cholesky factor of H and its selected inverse, built on first use after H

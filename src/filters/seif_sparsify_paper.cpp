@@ -12,14 +12,10 @@ namespace seif {
 
 void SeifSlam::sparsify() { deactivateSurplus(false); }
 
-void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
+void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot, bool block_gathered) {
   // §4, paper eq. (44-51): deactivate the surplus Y0, keep Y+.
   const int k = static_cast<int>(store_.robotLinks().size());
   const int drop = slot >= 0 ? 1 : k - options_.active;
-  // The iterated update left the active block gathered and current (measurementUpdate()):
-  // reordered below, not read again, with its passive terms.
-  const bool reuse = solve_active_mean_first && block_current_ && slot < 0;
-  block_current_ = false;
   if (drop <= 0) return;
   ++sparsifications_;
   if (options_.sparsify == SeifOptions::Sparsify::Eseif && slot < 0) ++eseif_fallbacks_;
@@ -43,6 +39,9 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot) {
   for (int i = 0; i < drop; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y0
   const bool conservative = options_.sparsify == SeifOptions::Sparsify::Conservative;
   if (conservative) beginConservativeSparsification();
+  // The iterated update left the active block gathered and current: reordered, not read
+  // again, with its passive terms.
+  const bool reuse = block_gathered && slot < 0;
   if (reuse) {
     store_.reorderGathered(order_);
   } else {

@@ -498,18 +498,17 @@ void SeifStore::reorderGathered(std::span<const int> slots) {
     rows[static_cast<std::size_t>(4 + 2 * i)] = from + 1;
   }
   const Eigen::Index n = 3 + 2 * k;
-  const auto order = std::span<const Eigen::Index>(rows.data(), static_cast<std::size_t>(n));
-  local_rhs_ = local_b_;
-  for (Eigen::Index r = 0; r < n; ++r) local_b_(r) = local_rhs_(order[static_cast<std::size_t>(r)]);
-  local_rhs_ = local_mu_;
-  for (Eigen::Index r = 0; r < n; ++r) local_mu_(r) = local_rhs_(order[static_cast<std::size_t>(r)]);
-  if (passive_current_) {
-    local_rhs_ = local_passive_;
-    for (Eigen::Index r = 0; r < n; ++r) local_passive_(r) = local_rhs_(order[static_cast<std::size_t>(r)]);
-  }
+  const auto from = [&rows](Eigen::Index r) { return rows[static_cast<std::size_t>(r)]; };
+  const auto permute = [&](LocalVector& v) {  // local_rhs_ as the scratch copy
+    local_rhs_ = v;
+    for (Eigen::Index r = 0; r < n; ++r) v(r) = local_rhs_(from(r));
+  };
+  permute(local_b_);
+  permute(local_mu_);
+  if (passive_current_) permute(local_passive_);
   const LocalMatrix H = local_H_;
   for (Eigen::Index c = 0; c < n; ++c) {
-    for (Eigen::Index r = 0; r < n; ++r) local_H_(r, c) = H(order[static_cast<std::size_t>(r)], order[static_cast<std::size_t>(c)]);
+    for (Eigen::Index r = 0; r < n; ++r) local_H_(r, c) = H(from(r), from(c));
   }
   gathered_.assign(slots.begin(), slots.end());
 }
@@ -628,14 +627,8 @@ void SeifStore::scatter() {
     for (int i = 0; i < k; ++i) {
       const auto a = static_cast<std::size_t>(i);
       if (!row_kept[a]) continue;
-      Node& n = nodes_[static_cast<std::size_t>(gathered_[a])];
-      n.w += row_change[a];
-      Vec3 g;
-      Mat3 A;
-      coarseTerms(gathered_[a], n.w, g, A);
-      coarse_g_ += g;
-      coarse_A_ += A;
-      n.coarse_dirty = false;
+      nodes_[static_cast<std::size_t>(gathered_[a])].w += row_change[a];
+      restoreCoarse(gathered_[a]);
     }
     // Settled here: out of the list (a later write lists them again).
     std::erase_if(coarse_dirty_, [this](int slot) { return !nodes_[static_cast<std::size_t>(slot)].coarse_dirty; });

@@ -237,7 +237,6 @@ class SeifStore {
   /// round by round, so that the cache misses of the slots overlap instead of adding up.
   /// When the map fits in the caches (cacheResident()) the prefetches are skipped.
   void relaxLandmarks(std::span<const int> slots);
-  bool cacheResident() const;
 
  private:
   friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp
@@ -279,6 +278,9 @@ class SeifStore {
   /// Takes landmark `slot`'s terms out of g and A before its row of H, b or its H_ix changes
   /// (every write() does); settleCoarse() puts them back.
   void touchCoarse(int slot);
+  /// Puts landmark `slot`'s terms, with its row w as it stands, back into the sums.
+  void restoreCoarse(int slot);
+  bool cacheResident() const;  // nodes and links fit in the caches: relaxLandmarks() skips prefetching
   void coarseTerms(int slot, const Mat23& w, Vec3& g, Mat3& A) const;  // landmark slot's terms with row w
   Mat23 landmarkBasis(const Vec2& ref) const;  // V_i, rigid motions taken at ref
   Mat23 coarseRow(int slot) const;  // (H V)_slot

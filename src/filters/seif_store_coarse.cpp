@@ -67,16 +67,21 @@ void SeifStore::settleCoarse() {
   for (int slot : coarse_dirty_) {
     Node& n = nodes_[static_cast<std::size_t>(slot)];
     if (!n.coarse_dirty) continue;  // deleted meanwhile (deleteLandmark())
-    n.coarse_dirty = false;
     n.w = coarseRow(slot);
-    Vec3 g;
-    Mat3 A;
-    coarseTerms(slot, n.w, g, A);
-    coarse_g_ += g;
-    coarse_A_ += A;
+    restoreCoarse(slot);
     blocks_touched_ += 1 + n.links.size();
   }
   coarse_dirty_.clear();
+}
+
+void SeifStore::restoreCoarse(int slot) {
+  Node& n = nodes_[static_cast<std::size_t>(slot)];
+  Vec3 g;
+  Mat3 A;
+  coarseTerms(slot, n.w, g, A);
+  coarse_g_ += g;
+  coarse_A_ += A;
+  n.coarse_dirty = false;
 }
 
 void SeifStore::robotCoarseTerms(Vec3& g, Mat3& A) const {
