@@ -13,6 +13,14 @@
 
 namespace seif {
 
+/// A = L L^T in place with the unblocked kernel (below): L in A's lower triangle, the strict
+/// upper one left as it was. False when A is not positive definite.
+template <typename Derived>
+bool choleskyInPlace(Eigen::MatrixBase<Derived>& A) {
+  // Returns the first column whose pivot is not positive, or -1.
+  return Eigen::internal::llt_inplace<double, Eigen::Lower>::unblocked(A.derived()) < 0;
+}
+
 template <typename Matrix>
 class SmallLLT {
  public:
@@ -25,8 +33,7 @@ class SmallLLT {
   template <typename Derived>
   SmallLLT& compute(const Eigen::MatrixBase<Derived>& H) {
     L_ = H;
-    // Returns the first column whose pivot is not positive, or -1.
-    ok_ = Eigen::internal::llt_inplace<double, Eigen::Lower>::unblocked(L_) < 0;
+    ok_ = choleskyInPlace(L_);
     return *this;
   }
 

@@ -10,7 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <queue>
+#include <memory>
 #include <string>
 #include <unordered_map>
 
@@ -253,6 +253,56 @@ class BlanketIndex {
 
 }  // namespace
 
+namespace {
+
+/// What a local marginal query allocates, kept per thread across queries so that a query
+/// in the steady state allocates only its result: the blanket's members, each member's links
+/// (the inner vectors keep their capacity), the frontier, and the dense H. A query made while
+/// another runs on the same thread (a callback's own query) takes the next one.
+struct BlanketWorkspace {
+  std::vector<int> order;
+  std::vector<std::vector<BlanketLink>> links;
+  std::size_t members = 0;  // links[0, members) are this query's
+  std::vector<std::pair<double, int>> offered, frontier;
+  std::vector<Eigen::Index> offset;
+  std::vector<double> h;  // H's storage, n x n column-major
+
+  std::vector<BlanketLink>& nextLinks() {
+    if (members == links.size()) links.emplace_back();
+    std::vector<BlanketLink>& l = links[members++];
+    l.clear();
+    return l;
+  }
+};
+
+class WorkspaceLease {
+ public:
+  WorkspaceLease() {
+    if (depth() == pool().size()) pool().push_back(std::make_unique<BlanketWorkspace>());
+    ws_ = pool()[depth()++].get();
+    ws_->order.clear();
+    ws_->members = 0;
+    ws_->frontier.clear();
+  }
+  ~WorkspaceLease() { --depth(); }
+  WorkspaceLease(const WorkspaceLease&) = delete;
+  WorkspaceLease& operator=(const WorkspaceLease&) = delete;
+  BlanketWorkspace& operator*() const { return *ws_; }
+
+ private:
+  static std::vector<std::unique_ptr<BlanketWorkspace>>& pool() {
+    thread_local std::vector<std::unique_ptr<BlanketWorkspace>> p;
+    return p;
+  }
+  static std::size_t& depth() {
+    thread_local std::size_t d = 0;
+    return d;
+  }
+  BlanketWorkspace* ws_;
+};
+
+}  // namespace
+
 Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
                                         const std::function<void(int, std::vector<BlanketLink>&)>& neighbours,
                                         const std::function<Eigen::MatrixXd(int)>& diagonal,
@@ -260,61 +310,84 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
                                         const std::function<Eigen::MatrixXd(int)>& bound) {
   // The blanket: the queried variables first, then the others in the order they joined;
   // each member's links are kept for assembling H below.
-  std::vector<int> order;
+  const WorkspaceLease lease;
+  BlanketWorkspace& ws = *lease;
+  std::vector<int>& order = ws.order;
   BlanketIndex index;
-  std::vector<std::vector<BlanketLink>> links;
   const auto join = [&](int v) {
     index.insert(v, static_cast<int>(order.size()));
     order.push_back(v);
-    links.emplace_back();
-    neighbours(v, links.back());
+    neighbours(v, ws.nextLinks());
   };
+  const auto links = [&](std::size_t a) -> const std::vector<BlanketLink>& { return ws.links[a]; };
   for (int v : vars) {
     if (!index.has(v)) join(v);
   }
   const std::size_t queried = order.size();
   if (budget == 0) {  // the Markov blanket
     for (std::size_t a = 0; a < queried; ++a) {
-      for (std::size_t k = 0; k < links[a].size(); ++k) {
-        const int c = links[a][k].var;  // links[] grows in join(): index, do not hold a reference
+      for (std::size_t k = 0; k < links(a).size(); ++k) {
+        const int c = links(a)[k].var;  // join() may grow ws.links: index, do not hold a reference
         if (!index.has(c)) join(c);
       }
     }
   } else {  // grown along the strongest link to the blanket so far
-    // Only a member's budget + queried strongest links can ever be chosen (every stronger
-    // one would have to join first, and the blanket never holds more), so only those enter.
-    std::priority_queue<std::pair<double, int>> frontier;
-    std::vector<std::pair<double, int>> offered;
-    const std::size_t most = budget + queried;
+    // Of a member's links to variables outside, only its `room` strongest can ever be chosen,
+    // room being what the budget has left (every stronger one would have to join first), so
+    // only those enter the frontier (a max-heap).
+    std::vector<std::pair<double, int>>& offered = ws.offered;
+    std::vector<std::pair<double, int>>& frontier = ws.frontier;
     const auto offer = [&](std::size_t a) {
+      const std::size_t room = budget - (order.size() - queried);
       offered.clear();
-      for (const BlanketLink& l : links[a]) offered.emplace_back(l.strength, l.var);
-      if (offered.size() > most) {
-        std::nth_element(offered.begin(), offered.begin() + static_cast<std::ptrdiff_t>(most), offered.end(),
+      for (const BlanketLink& l : links(a)) {
+        if (!index.has(l.var)) offered.emplace_back(l.strength, l.var);
+      }
+      if (offered.size() > room) {
+        std::nth_element(offered.begin(), offered.begin() + static_cast<std::ptrdiff_t>(room), offered.end(),
                          std::greater<>());
-        offered.resize(most);
+        offered.resize(room);
       }
       for (const auto& o : offered) {
-        if (!index.has(o.second)) frontier.push(o);
+        frontier.push_back(o);
+        std::push_heap(frontier.begin(), frontier.end());
       }
     };
     for (std::size_t a = 0; a < queried; ++a) offer(a);
     while (order.size() - queried < budget && !frontier.empty()) {
-      const int c = frontier.top().second;
-      frontier.pop();
+      std::pop_heap(frontier.begin(), frontier.end());
+      const int c = frontier.back().second;
+      frontier.pop_back();
       if (index.has(c)) continue;
       join(c);
-      offer(order.size() - 1);
+      if (order.size() - queried < budget) offer(order.size() - 1);
     }
   }
+  // H over the blanket. Without a bound the queried variables go last: with H = L L^T their
+  // marginal covariance is then (L_QQ L_QQ^T)^-1 from L's trailing block alone, the inverse of
+  // the Schur complement (no solve over the whole blanket). The bound needs H^-1 E_Q on
+  // every row, so there they stay first.
+  const bool queried_last = !bound;
   const auto dim = [](int v) { return v < 0 ? Eigen::Index(3) : Eigen::Index(2); };
-  std::vector<Eigen::Index> offset(order.size() + 1, 0);
-  for (std::size_t a = 0; a < order.size(); ++a) offset[a + 1] = offset[a] + dim(order[a]);
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(offset.back(), offset.back());
+  std::vector<Eigen::Index>& offset = ws.offset;  // by member position in `order`
+  offset.assign(order.size(), 0);
+  Eigen::Index next = 0, q = 0;
+  for (std::size_t a = 0; a < queried; ++a) q += dim(order[a]);
+  for (std::size_t a = queried_last ? queried : 0; a < order.size(); ++a) {
+    offset[a] = next;
+    next += dim(order[a]);
+  }
+  for (std::size_t a = 0; queried_last && a < queried; ++a) {
+    offset[a] = next;
+    next += dim(order[a]);
+  }
+  const Eigen::Index n = next;
+  ws.h.assign(static_cast<std::size_t>(n * n), 0.0);
+  Eigen::Map<Eigen::MatrixXd> H(ws.h.data(), n, n);
   for (std::size_t a = 0; a < order.size(); ++a) {
     const Eigen::Index da = dim(order[a]);
     H.block(offset[a], offset[a], da, da) = diagonal(order[a]);
-    for (const BlanketLink& l : links[a]) {
+    for (const BlanketLink& l : links(a)) {
       if (l.block == nullptr) continue;  // written from the other side
       const int found = index.find(l.var);
       if (found < 0) continue;
@@ -325,17 +398,31 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
       H.block(offset[c], offset[a], dc, da) = B.transpose();
     }
   }
-  const SmallLLT<Eigen::MatrixXd> llt(H);
-  if (llt.info() != Eigen::Success) {
-    throw NumericError(filter + ": the information of a Markov blanket is not positive definite");
+  const auto indefinite = [&] {
+    return NumericError(filter + ": the information of a Markov blanket is not positive definite");
+  };
+  if (queried_last) {
+    if (!choleskyInPlace(H)) throw indefinite();
+    // Sigma_QQ = (L_QQ L_QQ^T)^-1 = L_QQ^-T L_QQ^-1, L_QQ the trailing q x q block.
+    Eigen::MatrixXd Linv = Eigen::MatrixXd::Identity(q, q);
+    H.bottomRightCorner(q, q).triangularView<Eigen::Lower>().solveInPlace(Linv);
+    Eigen::MatrixXd blanket(q, q);
+    blanket.noalias() = Linv.transpose() * Linv;
+    // In the order asked: the queried lead `order` and sit at offset - (n - q) in the block.
+    std::vector<Eigen::Index> rows;
+    rows.reserve(static_cast<std::size_t>(q));
+    for (int v : vars) {
+      const Eigen::Index at = offset[static_cast<std::size_t>(index.find(v))] - (n - q);
+      for (Eigen::Index i = 0; i < dim(v); ++i) rows.push_back(at + i);
+    }
+    return blanket(rows, rows);
   }
+  const SmallLLT<Eigen::MatrixXd> llt(H);
+  if (llt.info() != Eigen::Success) throw indefinite();
   // Only the queried variables' columns, in the order asked (they lead the blanket).
-  Eigen::Index n = 0;
-  for (int v : vars) n += dim(v);
-  const Eigen::Index q = offset[queried];
   const Eigen::MatrixXd Z = llt.solve(Eigen::MatrixXd::Identity(H.rows(), q));  // H_II^-1 E_Q
   Eigen::MatrixXd X = Z.topRows(q);
-  if (bound) {
+  {
     // The boundary's share: y_I = -H_II^-1 H_Ib y_b + v, v independent of the rest, so
     // Sigma_QQ = X + sum over boundary pairs M_c Cov(y_c, y_d) M_d^T, M_c = -Z^T H_Ic, which
     // covariance intersection bounds by sum_c M_c B_c M_c^T / w_c (seif_bounds.hpp).
@@ -344,7 +431,7 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
     std::unordered_map<int, std::vector<BlanketLink>> far_links;  // of boundary variables, when needed
     for (std::size_t a = 0; a < order.size(); ++a) {
       const Eigen::Index da = dim(order[a]);
-      for (const BlanketLink& l : links[a]) {
+      for (const BlanketLink& l : links(a)) {
         if (index.has(l.var)) continue;
         const Eigen::Index dc = dim(l.var);
         Eigen::MatrixXd H_ac(da, dc);
@@ -378,7 +465,7 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
     }
   }
   std::vector<Eigen::Index> rows;
-  rows.reserve(static_cast<std::size_t>(n));
+  rows.reserve(static_cast<std::size_t>(q));
   for (int v : vars) {
     const Eigen::Index at = offset[static_cast<std::size_t>(index.find(v))];
     for (Eigen::Index i = 0; i < dim(v); ++i) rows.push_back(at + i);
