@@ -147,6 +147,34 @@ TEST_P(MarginalsOfEveryFilter, ExactAndLocalAgreeWithTheDenseInverse) {
   EXPECT_THROW(f->marginal(std::vector<int>{12345}, true, MarginalMode::Exact), UnknownLandmark);
 }
 
+TEST(BoundedBlanket, IsTheGreedyBlanketOnAMapLargerThanTheBudget) {
+  // The blanket is grown with a heap, each member offering only the links the budget still
+  // has room for, and none weaker than what the frontier already guarantees. The result must
+  // be the plain greedy blanket's (computed densely above) for every query.
+  const test::Scenario s = test::makeScenario(11, 60, 200);
+  std::mt19937_64 rng(3);
+  for (int budget : {2, 5, 12, 24}) {
+    const auto f = runFor("seif:blanket=" + std::to_string(budget), s, 200);
+    const Eigen::MatrixXd H = f->information();
+    const std::vector<int>& all = f->landmarkIds();
+    ASSERT_GT(all.size(), static_cast<std::size_t>(budget) + 10);
+    std::uniform_int_distribution<std::size_t> pick(0, all.size() - 1);
+    for (int query = 0; query < 12; ++query) {
+      std::vector<int> ids;
+      for (int k = 0; k < 1 + query % 4; ++k) {
+        const int id = all[pick(rng)];
+        if (std::find(ids.begin(), ids.end(), id) == ids.end()) ids.push_back(id);
+      }
+      const bool pose = query % 3 != 0;
+      std::vector<Eigen::Index> rows = rowsOf(*f, ids);
+      if (!pose) rows.erase(rows.begin(), rows.begin() + 3);
+      const Marginal local = f->marginal(ids, pose, MarginalMode::Local);
+      const Eigen::MatrixXd expected = restrictedInverse(H, greedyBlanketRows(H, rows, static_cast<std::size_t>(budget)), rows.size());
+      EXPECT_LT(relDiff(local.covariance, expected), 1e-9) << "budget " << budget << ", query " << query;
+    }
+  }
+}
+
 TEST(BoundedBlanket, GrowsTowardsTheMarginalInTheLoewnerOrder) {
   // The blankets of growing bounds are nested, so each local marginal conditions on less than
   // the one before: P(1) <= P(2) <= ... <= exact, and a bound beyond the map is the marginal.

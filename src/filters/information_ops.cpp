@@ -337,11 +337,12 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
     // only those enter the frontier (a max-heap).
     std::vector<std::pair<double, int>>& offered = ws.offered;
     std::vector<std::pair<double, int>>& frontier = ws.frontier;
+    double floor = -1.0;  // links weaker than this can no longer be chosen (below)
     const auto offer = [&](std::size_t a) {
       const std::size_t room = budget - (order.size() - queried);
       offered.clear();
       for (const BlanketLink& l : links(a)) {
-        if (!index.has(l.var)) offered.emplace_back(l.strength, l.var);
+        if (l.strength >= floor && !index.has(l.var)) offered.emplace_back(l.strength, l.var);
       }
       if (offered.size() > room) {
         std::nth_element(offered.begin(), offered.begin() + static_cast<std::ptrdiff_t>(room), offered.end(),
@@ -354,6 +355,21 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
       }
     };
     for (std::size_t a = 0; a < queried; ++a) offer(a);
+    // When the frontier already offers `budget` distinct variables at strength >= t, the
+    // heap pops all of them before anything weaker, and they fill the budget: a link weaker
+    // than t is never chosen, so later members offer none (the blanket is the same).
+    offered.assign(frontier.begin(), frontier.end());
+    std::sort(offered.begin(), offered.end(), [](const auto& x, const auto& y) {
+      return x.second != y.second ? x.second < y.second : x.first > y.first;
+    });
+    offered.erase(std::unique(offered.begin(), offered.end(),
+                              [](const auto& x, const auto& y) { return x.second == y.second; }),
+                  offered.end());  // each variable once, at its strongest
+    if (offered.size() >= budget) {
+      std::nth_element(offered.begin(), offered.begin() + static_cast<std::ptrdiff_t>(budget - 1), offered.end(),
+                       std::greater<>());
+      floor = offered[budget - 1].first;
+    }
     while (order.size() - queried < budget && !frontier.empty()) {
       std::pop_heap(frontier.begin(), frontier.end());
       const int c = frontier.back().second;
