@@ -255,10 +255,10 @@ class BlanketIndex {
 
 namespace {
 
-/// What a local marginal query allocates, kept per thread across queries so that a query
-/// in the steady state allocates only its result: the blanket's members, each member's links
-/// (the inner vectors keep their capacity), the frontier, and the dense H. A query made while
-/// another runs on the same thread (a callback's own query) takes the next one.
+/// The buffers of a local marginal query, kept per thread across queries: the blanket's
+/// members, each member's links (the inner vectors keep their capacity), the frontier and
+/// the dense H. A query made while another runs on the same thread (a callback's own query)
+/// takes the next one.
 struct BlanketWorkspace {
   std::vector<int> order;
   std::vector<std::vector<BlanketLink>> links;
