@@ -173,6 +173,41 @@ TEST(Consistency, PosteriorMeanRowsFollowTheFiltersWhoseMeanLagsTheirInformation
   EXPECT_NE(seif::consistencyTable(r).find("| seif:active=4 [posterior mean] |"), std::string::npos);
 }
 
+// A filter that diverges in a run does not take the study down: its runs are listed, its
+// figures are the other runs', and every other filter keeps all of its.
+// `seif:sparsify=conservative,active=2` (standard Jacobians) stops within 30 steps on the
+// paper world: its scale runs away (docs/consistency.md, "Where it fails").
+TEST(Consistency, ARunAFilterStopsInIsListedAndTheRestIsKept) {
+  seif::ConsistencyOptions o = smallStudy(2);
+  o.filters.push_back(seif::parseFilterSpec("seif:sparsify=conservative,active=2"));
+  const seif::ConsistencyResult r = seif::runConsistency(o);
+  ASSERT_EQ(r.filters.size(), 3u);
+  seif::ConsistencyOptions two = smallStudy(2);
+  const seif::ConsistencyResult plain = seif::runConsistency(two);
+  for (std::size_t i : {0u, 1u}) {
+    EXPECT_TRUE(r.filters[i].failed_runs.empty()) << r.filters[i].name;
+    EXPECT_EQ(r.filters[i].nees_final.landmark, plain.filters[i].nees_final.landmark);
+    EXPECT_EQ(r.filters[i].error_final, plain.filters[i].error_final);
+  }
+  const seif::ConsistencyFilterResult& stopped = r.filters[2];
+  ASSERT_FALSE(stopped.failed_runs.empty());
+  for (const seif::ConsistencyFailure& x : stopped.failed_runs) {
+    EXPECT_EQ(x.run.rfind("seed ", 0), 0u) << x.run;  // seed 5..8, the study's
+  }
+  EXPECT_NE(stopped.failed_runs.front().error.find("conservative sparsification"), std::string::npos)
+      << stopped.failed_runs.front().error;
+  ASSERT_EQ(stopped.landmark_nees_runs.size(), 4u);
+  std::size_t nan = 0;
+  for (double v : stopped.landmark_nees_runs) nan += std::isnan(v) ? 1 : 0;
+  EXPECT_EQ(nan, stopped.failed_runs.size());
+  const auto j = nlohmann::json::parse(seif::consistencyJson(r, o));
+  EXPECT_EQ(j["filters"][2]["failed_runs"].size(), stopped.failed_runs.size());
+  EXPECT_EQ(j["filters"][0]["failed_runs"].size(), 0u);
+  EXPECT_NE(seif::consistencyTable(r).find("stopped in " + std::to_string(stopped.failed_runs.size()) + " of 4 runs"),
+            std::string::npos)
+      << seif::consistencyTable(r);
+}
+
 TEST(Consistency, BadOptionsAreRejected) {
   seif::ConsistencyOptions o = smallStudy(1);
   o.runs = 0;
@@ -204,6 +239,15 @@ TEST(ConsistencyCli, WritesTheTableJsonAndCsv) {
   ASSERT_EQ(post.status, 0) << post.err;
   EXPECT_NE(post.out.find("| seif:active=3 [posterior mean] |"), std::string::npos) << post.out;
   EXPECT_EQ(post.out.find("| ekf [posterior mean] |"), std::string::npos) << post.out;
+  // A filter that stops: the results are written all the same, and the status says so.
+  const auto dir2 = seif::test::scratchDir("consistency_cli_stopped");
+  const auto stopped = seif::test::runCli("consistency --runs 2 --samples 3 --filters ekf,seif:sparsify=conservative,active=2 "
+                                          "--no-figures --out " + dir2.string());
+  EXPECT_EQ(stopped.status, 2) << stopped.err;
+  EXPECT_NE(stopped.err.find("seif:sparsify=conservative,active=2 stopped in"), std::string::npos) << stopped.err;
+  EXPECT_NE(stopped.out.find("| ekf |"), std::string::npos) << stopped.out;
+  const nlohmann::json js = nlohmann::json::parse(seif::test::slurp(dir2 / "nees.json"));
+  EXPECT_FALSE(js["filters"][1]["failed_runs"].empty());
   const auto bad = seif::test::runCli("consistency --filters ekf:relax=3 --out " + dir.string());
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.err.find("ekf:relax=3"), std::string::npos) << bad.err;

@@ -4,6 +4,7 @@
 #include "commands.hpp"
 #include "options.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/eval/consistency.hpp>
 
 #include <climits>
@@ -71,6 +72,17 @@ void consistencyCommand(const ConsistencyArgs& args) {
   if (!args.no_figures && renderFigure("consistency.py", {dir.string()})) {
     std::printf("figures: %s/nees_global.png, %s/nees_relative.png\n", args.out.c_str(), args.out.c_str());
   }
+  // Runs a filter stopped in are in the table and nees.json; the exit status says so too.
+  std::string stopped;
+  for (const ConsistencyFilterResult& f : result.filters) {
+    if (f.failed_runs.empty() || f.posterior_mean) continue;
+    stopped += (stopped.empty() ? "" : "; ") + f.name + " stopped in " + std::to_string(f.failed_runs.size()) +
+               " of " + std::to_string(result.runs) + " runs (first: " + f.failed_runs.front().run + ": " +
+               f.failed_runs.front().error + ")";
+  }
+  if (!stopped.empty()) {
+    throw NumericError("consistency: " + stopped + "; the other runs' results are in " + args.out);
+  }
 }
 
 }  // namespace
@@ -89,7 +101,9 @@ void addConsistencyCommand(CLI::App& app) {
       "Filters are --filter names with options: ekf, eif, seif, batch (the MAP smoother over every\n"
       "pose and landmark, the reference), e.g. seif:sparsify=eseif,linearization=fej.\n"
       "Writes OUT/nees.json, OUT/nees.csv, OUT/table.md and the figures nees_global.png and\n"
-      "nees_relative.png (scripts/figures/consistency.py, /usr/bin/python3 with matplotlib).");
+      "nees_relative.png (scripts/figures/consistency.py, /usr/bin/python3 with matplotlib).\n"
+      "A filter that stops in a run (a numerical failure: it diverged) is listed under the table and\n"
+      "in nees.json, its figures are those of its other runs, and the exit status is 2.");
   cmd->add_option("--preset", args->preset, "simulator world: paper, uniform, corridor or park")
       ->check(CLI::IsMember({"paper", "uniform", "corridor", "park"}))
       ->capture_default_str();

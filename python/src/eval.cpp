@@ -408,6 +408,10 @@ void bindConsistency(py::module_& m) {
       .def_readonly("pose_relative", &NeesPoint::pose_relative)
       .def_readonly("landmark_relative", &NeesPoint::landmark_relative)
       .def("__repr__", [](py::handle s) { return reprOf(s, {"pose", "landmark", "pose_relative", "landmark_relative"}); });
+  py::class_<ConsistencyFailure>(m, "ConsistencyFailure")
+      .def_readonly("run", &ConsistencyFailure::run, "'seed 6', or the dataset's name")
+      .def_readonly("error", &ConsistencyFailure::error)
+      .def("__repr__", [](const ConsistencyFailure& f) { return "ConsistencyFailure(" + f.run + ": " + f.error + ")"; });
   py::class_<ConsistencyFilterResult>(m, "ConsistencyFilterResult")
       .def_readonly("name", &ConsistencyFilterResult::name)
       .def_readonly("spec", &ConsistencyFilterResult::spec, "its index in ConsistencyOptions.filters")
@@ -420,7 +424,9 @@ void bindConsistency(py::module_& m) {
       .def_readonly("error_aligned_final", &ConsistencyFilterResult::error_aligned_final)
       .def_readonly("mse_final", &ConsistencyFilterResult::mse_final)
       .def_readonly("mse_aligned_final", &ConsistencyFilterResult::mse_aligned_final)
-      .def_readonly("seconds", &ConsistencyFilterResult::seconds);
+      .def_readonly("seconds", &ConsistencyFilterResult::seconds)
+      .def_readonly("failed_runs", &ConsistencyFilterResult::failed_runs,
+                    "runs it stopped in (a numerical failure), left out of its figures");
   py::class_<ConsistencyResult>(m, "ConsistencyResult")
       .def_readonly("runs", &ConsistencyResult::runs)
       .def_readonly("steps", &ConsistencyResult::steps)

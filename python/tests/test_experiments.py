@@ -1,5 +1,6 @@
 """The experiments' library entry points from Python (GIL released, callbacks re-acquire)."""
 import json
+import math
 import threading
 
 import numpy as np
@@ -71,6 +72,17 @@ def test_consistency_runs_on_threads_with_a_progress_callback():
     result = seif.run_consistency(options)
     assert [(f.name, f.spec, f.posterior_mean) for f in result.filters] == [
         ("ekf", 0, False), ("seif", 1, False), ("seif [posterior mean]", 1, True)]
+    assert all(not f.failed_runs for f in result.filters)
+    # A filter that diverges is listed with its runs; the study goes on.
+    options.posterior_mean = False
+    options.world = seif.preset_config("paper", 20, 120, 5)
+    options.filters = [seif.parse_filter_spec("ekf"), seif.parse_filter_spec("seif:sparsify=conservative,active=2")]
+    result = seif.run_consistency(options)
+    assert not result.filters[0].failed_runs
+    stopped = result.filters[1].failed_runs
+    assert stopped and all(f.run in ("seed 5", "seed 6", "seed 7") for f in stopped)
+    assert "conservative sparsification" in stopped[0].error
+    assert sum(math.isnan(v) for v in result.filters[1].landmark_nees_runs) == len(stopped)
 
 
 def test_bench_case_and_cost_model():

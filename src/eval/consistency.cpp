@@ -52,6 +52,7 @@ struct FilterRun {
   EstimateRun own;
   std::optional<EstimateRun> posterior;
   double seconds = 0.0;
+  std::optional<std::string> failure;  // the NumericError it stopped with; its figures NaN
 };
 
 std::vector<std::size_t> sampleSteps(std::size_t steps, int samples) {
@@ -247,6 +248,9 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
   const std::size_t nf = options.filters.size();
   std::vector<std::vector<FilterRun>> results(runs);  // [run][filter]
   std::vector<std::size_t> steps_of_run(runs, 0);
+  const auto runName = [&](std::size_t r) {
+    return real ? options.datasets[r].name : "seed " + std::to_string(options.world.seed + r);
+  };
   auto runFilters = [&](std::size_t r) {
     WorldConfig world = options.world;
     world.seed = options.world.seed + r;
@@ -259,10 +263,13 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     for (const FilterSpec& spec : options.filters) {
       try {
         results[r].push_back(runOne(spec, run_data, config, start, samples, world.seed, options.posterior_mean));
+      } catch (const NumericError& e) {  // the filter diverged: this run's figures are NaN, the study goes on
+        FilterRun failed;
+        failed.own.nees.assign(samples.size(), kNoNees);
+        failed.failure = e.what();
+        results[r].push_back(std::move(failed));
       } catch (const std::exception& e) {
-        throw NumericError("consistency: " +
-                           (real ? options.datasets[r].name : "run with seed " + std::to_string(world.seed)) +
-                           ", filter " + spec.text + ": " + e.what());
+        throw NumericError("consistency: " + runName(r) + ", filter " + spec.text + ": " + e.what());
       }
     }
   };
@@ -287,7 +294,10 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     fr.name = options.filters[f].text + (posterior ? " [posterior mean]" : "");
     fr.spec = f;
     fr.posterior_mean = posterior;
+    // A stopped run measured nothing: NaN throughout (finiteMean() leaves it out).
+    const EstimateRun stopped{std::vector<NeesPoint>(result.sample_steps.size(), kNoNees)};
     auto estimate = [&](std::size_t r) -> const EstimateRun& {
+      if (results[r][f].failure) return stopped;
       return posterior ? *results[r][f].posterior : results[r][f].own;
     };
     for (std::size_t s = 0; s < result.sample_steps.size(); ++s) {
@@ -305,6 +315,7 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
       rmse.push_back(run.rmse);
       rmse_aligned.push_back(run.rmse_aligned);
       fr.seconds += results[r][f].seconds;
+      if (results[r][f].failure) fr.failed_runs.push_back({runName(r), *results[r][f].failure});
     }
     fr.mse_final = finiteMean(mse);
     fr.mse_aligned_final = finiteMean(mse_aligned);
@@ -314,14 +325,18 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
   };
   for (std::size_t f = 0; f < nf; ++f) {
     summarise(f, false);
-    const bool posterior = results[0][f].posterior.has_value();
-    for (std::size_t r = 1; r < runs; ++r) {
-      if (results[r][f].posterior.has_value() != posterior) {
+    // Whether it has a posterior-mean row: from its runs that completed (it depends on the
+    // spec alone).
+    std::optional<bool> posterior;
+    for (std::size_t r = 0; r < runs; ++r) {
+      if (results[r][f].failure) continue;
+      if (!posterior) posterior = results[r][f].posterior.has_value();
+      if (results[r][f].posterior.has_value() != *posterior) {
         throw NumericError("consistency: filter " + options.filters[f].text +
                            " gave a posterior mean in some runs and not in others");
       }
     }
-    if (posterior) summarise(f, true);
+    if (posterior.value_or(false)) summarise(f, true);
   }
   return result;
 }
@@ -334,6 +349,8 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
                              {"landmark", nlohmann::json::array()},
                              {"pose_relative", nlohmann::json::array()},
                              {"landmark_relative", nlohmann::json::array()}};
+    nlohmann::json failures = nlohmann::json::array();
+    for (const ConsistencyFailure& x : f.failed_runs) failures.push_back({{"run", x.run}, {"error", x.error}});
     for (const NeesPoint& p : f.nees) {
       series["pose"].push_back(finiteOrNull(p.pose));
       series["landmark"].push_back(finiteOrNull(p.landmark));
@@ -353,7 +370,8 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
                        {"mse_final", finiteOrNull(f.mse_final)},
                        {"mse_aligned_final", finiteOrNull(f.mse_aligned_final)},
                        {"seconds", f.seconds},
-                       {"nees", series}});
+                       {"nees", series},
+                       {"failed_runs", failures}});
   }
   const WorldConfig& w = options.world;
   nlohmann::json datasets = nlohmann::json::array();
@@ -428,6 +446,13 @@ std::string consistencyTable(const ConsistencyResult& result) {
     << result.runs << " runs: pose [" << cell(result.pose_band.lo, 2) << ", " << cell(result.pose_band.hi, 2)
     << "] (3 dof), landmark [" << cell(result.landmark_band.lo, 2) << ", " << cell(result.landmark_band.hi, 2)
     << "] (2 dof, each landmark's NEES averaged over the map first).\n";
+  for (const ConsistencyFilterResult& f : result.filters) {
+    if (f.failed_runs.empty() || f.posterior_mean) continue;
+    t << "\n" << f.name << " stopped in " << f.failed_runs.size() << " of " << result.runs << " runs"
+      << (f.failed_runs.size() < static_cast<std::size_t>(result.runs) ? "; its figures are those of the others:\n"
+                                                                       : ":\n");
+    for (const ConsistencyFailure& x : f.failed_runs) t << "- " << x.run << ": " << x.error << "\n";
+  }
   if (std::any_of(result.filters.begin(), result.filters.end(), [](const auto& f) { return f.posterior_mean; })) {
     t << "[posterior mean]: the filter's own covariances with the mean H^-1 b of its information in place of its "
          "own (amortised) mean.\n";

@@ -68,6 +68,13 @@ struct NeesPoint {
   double landmark_relative = 0.0;
 };
 
+/// A run in which a filter stopped with a NumericError (it diverged): the run's name ("seed
+/// 6", or the dataset's) and the error.
+struct ConsistencyFailure {
+  std::string run;
+  std::string error;
+};
+
 struct ConsistencyFilterResult {
   std::string name;               ///< the spec as given, e.g. "seif:sparsify=eseif"; "... [posterior mean]"
   std::size_t spec = 0;           ///< its index in ConsistencyOptions::filters
@@ -82,6 +89,9 @@ struct ConsistencyFilterResult {
   double mse_final = 0.0;            ///< mean squared landmark error [m^2], mean over runs
   double mse_aligned_final = 0.0;
   double seconds = 0.0;              ///< filter time, summed over runs (finish() included)
+  /// The runs it stopped in. Their figures are left out of every mean above (NaN in
+  /// landmark_nees_runs); the other filters' figures of those runs are kept.
+  std::vector<ConsistencyFailure> failed_runs;
 };
 
 struct ConsistencyResult {
@@ -94,8 +104,9 @@ struct ConsistencyResult {
 };
 
 /// Runs the study. `progress(done, total)` counts runs and is called from worker threads,
-/// one call at a time. Throws NumericError naming the run's seed and the filter when a
-/// filter fails, InvalidArgument for runs < 1, samples < 1 or no filter.
+/// one call at a time. A filter that stops with a NumericError in a run is listed in its
+/// result's failed_runs, and the study goes on. Other errors throw, naming the run and the
+/// filter; InvalidArgument for runs < 1, samples < 1 or no filter.
 ConsistencyResult runConsistency(const ConsistencyOptions& options,
                                  const std::function<void(std::size_t, std::size_t)>& progress = {});
 
@@ -109,7 +120,8 @@ NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const st
 /// "sample_steps", "filters": [{"name", "filter_spec", "estimate" ("own" | "posterior_mean"), "pose_nees_final", "landmark_nees_final",
 /// "pose_nees_relative_final", "landmark_nees_relative_final", "error_final",
 /// "error_aligned_final", "mse_final", "mse_aligned_final", "seconds", "nees": {"pose":
-/// [...], "landmark": [...], "pose_relative": [...], "landmark_relative": [...]}}]}.
+/// [...], "landmark": [...], "pose_relative": [...], "landmark_relative": [...]},
+/// "failed_runs": [{"run", "error"}]}]}.
 /// NaN is written as null.
 std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOptions& options);
 
