@@ -151,7 +151,7 @@ INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
                                            "seif:linearization=invariant,iterations=2,bounds=true",
                                            "seif:sparsify=eseif,covariance=conservative",
                                            "seif:motion=deferred",
-                                           "seif:profile=consistent,active=20,sparsify=conservative",
+                                           "seif:profile=consistent,active=20,sparsify=conservative,gauge=paper",
                                            "seif:profile=consistent,motion=deferred,bounds=true",
                                            "seif:linearization=invariant,gauge=kept,active=4",
                                            "seif:linearization=invariant,gauge=kept,active=4,coarse=rigid"));

@@ -101,6 +101,7 @@ TEST(FilterOptions, AProfileIsOverriddenByTheKeysAfterIt) {
   EXPECT_EQ(s.seif.active, 8);
   EXPECT_EQ(s.seif.coarse, seif::SeifOptions::Coarse::Rigid);
   EXPECT_EQ(s.seif.relax, 40);
+  EXPECT_EQ(s.seif.gauge, seif::SeifOptions::Gauge::Kept);
   EXPECT_EQ(seif::parseFilterSpec("seif:active=8,profile=consistent").seif.active, 30);
   EXPECT_THROW(seif::parseFilterSpec("seif:profile=fast"), seif::InvalidArgument);
   EXPECT_THROW(seif::parseFilterSpec("ekf:profile=consistent"), seif::InvalidArgument);

@@ -287,7 +287,7 @@ def test_the_association_ceiling_from_python():
     assert seif.association_ceiling(seif.RobotLogSource(log, seif.NoiseModel()), seif.RangeBearingModel(0.5, 0.03)) is None
 
 
-@pytest.mark.parametrize("spec", ["seif:rho=0.05", "seif:profile=consistent,active=20,sparsify=conservative"])
+@pytest.mark.parametrize("spec", ["seif:rho=0.05", "seif:profile=consistent,active=20,sparsify=conservative,gauge=paper"])
 def test_seif_information_scale_reaches_python(paper_world, spec):
     """rho and sparsify=conservative keep the store's information times kappa
     (information_scale): the covariances Python reads are the inverse of the information it reads."""
