@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <vector>
@@ -95,6 +96,40 @@ TEST(Cli, SeifRunsOnASimulatedWorldAndReportsItsStructure) {
   EXPECT_LE(m["max_robot_links"].get<int>(), 4);
   EXPECT_EQ(m["seif"]["active"].get<int>(), 4);
   EXPECT_LT(m["landmark_rmse"].get<double>(), 0.1);
+  std::filesystem::remove_all(dir);
+}
+
+// --smooth reads each filter's landmark covariances against the batch MAP's (the honest
+// reference under the same models). On the paper world the consistent profile claims about
+// the batch's variance; the EKF a fifth of it; the paper SEIF under a tenth of the EKF's.
+TEST(Cli, SmoothMeasuresTheFiltersCovariancesAgainstTheBatchs) {
+  const auto dir = scratchDir("covariance-ratio");
+  ASSERT_EQ(runCli("simulate --preset paper --seed 3 --out " + (dir / "W").string()).status, 0);
+  std::map<std::string, double> median;
+  for (const std::string f : {"ekf", "seif", "seif:profile=consistent"}) {
+    const std::filesystem::path out = dir / (f == "ekf" ? "ekf" : f == "seif" ? "seif" : "profile");
+    const auto r = runCli("run --dataset " + (dir / "W").string() + " --filter " + f + " --smooth --out " + out.string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto c = readJson(out / "metrics.json")["filter_before_smoothing"]["landmark_covariance_ratio_to_batch"];
+    median[f] = c["median"].get<double>();
+    EXPECT_LE(c["p10"].get<double>(), median[f]);
+    EXPECT_LE(median[f], c["p90"].get<double>());
+    // The same median from the two maps the run writes (cov_xx + cov_yy, rows by id).
+    const auto batch = readRows(out / "map.csv", ',');
+    const auto filter = readRows(out / "map_filter.csv", ',');
+    ASSERT_EQ(batch.size(), filter.size());
+    std::vector<double> ratios;
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      ASSERT_EQ(batch[i][0], filter[i][0]);
+      ratios.push_back((filter[i][3] + filter[i][5]) / (batch[i][3] + batch[i][5]));
+    }
+    std::sort(ratios.begin(), ratios.end());
+    EXPECT_NEAR(ratios[(ratios.size() - 1) / 2 + ((ratios.size() - 1) % 2)], median[f], 1e-6 * median[f]) << f;
+  }
+  EXPECT_GT(median["seif:profile=consistent"], 0.6);
+  EXPECT_LT(median["seif:profile=consistent"], 1.5);
+  EXPECT_LT(median["ekf"], 0.5);
+  EXPECT_LT(median["seif"], 0.1 * median["ekf"]);
   std::filesystem::remove_all(dir);
 }
 

@@ -214,7 +214,9 @@ void addRunCommand(CLI::App& app) {
   cmd->add_flag("--smooth", args->smooth,
                  "after the filter, the batch MAP from the filter's estimate (the batch's flags below\n"
                  "set its solver): the smoothed trajectory and map are the outputs, the filter's are written\n"
-                 "beside them (trajectory_filter.tum, map_filter.csv) and compared in metrics.json");
+                 "beside them (trajectory_filter.tum, map_filter.csv) and compared in metrics.json\n"
+                 "(filter_before_smoothing: errors, distance from the batch map, and the ratio of the\n"
+                 "filter's landmark covariances to the batch's: below 1 it claims too little variance)");
   args->association.add(*cmd);
   args->noise.add(*cmd);
   args->options.add(*cmd, /*batch=*/true);

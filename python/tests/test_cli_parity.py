@@ -143,5 +143,8 @@ def test_smooth_python_equals_cli(cli, simulated_folder, tmp_path):
     assert report.smoother.init == "seif"
     assert report.smoother.final_cost == py_metrics["batch"]["final_cost"] < report.smoother.initial_cost
     assert report.filter_map_distance == py_metrics["filter_before_smoothing"]["map_distance_to_batch"] > 0
+    ratio = py_metrics["filter_before_smoothing"]["landmark_covariance_ratio_to_batch"]
+    assert list(report.filter_covariance_ratio) == [ratio["median"], ratio["p10"], ratio["p90"]]
+    assert 0 < ratio["p10"] <= ratio["median"] <= ratio["p90"]
     assert report.filter_errors.ate == py_metrics["filter_before_smoothing"]["ate_rmse"]
     assert len(report.output.filter_trajectory) == len(report.output.trajectory)

@@ -165,6 +165,12 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
                                     {"gps_rmse", optionalJson(f.gps)},
                                     {"gps_median_error", optionalJson(f.gps_median)},
                                     {"map_distance_to_batch", optionalJson(r.filter_map_distance)}};
+    if (r.filter_covariance_ratio) {
+      const Vec3& c = *r.filter_covariance_ratio;
+      j["filter_before_smoothing"]["landmark_covariance_ratio_to_batch"] = {
+          {"median", c(0)}, {"p10", c(1)}, {"p90", c(2)},
+          {"definition", "over the landmarks, trace(filter's covariance) / trace(batch's): 1 honest, below 1 overconfident"}};
+    }
   }
   // The configuration the filter ran with, written as a spec that parses back to it.
   const FilterSpec spec = requestedSpec(request, r.filter);
@@ -285,6 +291,16 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
     double sum = 0.0;
     for (int id : filter->landmarkIds()) sum += (filtered->landmark(id) - filter->landmark(id)).squaredNorm();
     if (!filter->landmarkIds().empty()) report.filter_map_distance = std::sqrt(sum / static_cast<double>(filter->landmarkIds().size()));
+    std::vector<double> ratios;
+    for (int id : filter->landmarkIds()) {
+      const double batch = filter->landmarkCovariance(id).trace();
+      if (batch > 0.0) ratios.push_back(filtered->landmarkCovariance(id).trace() / batch);
+    }
+    if (!ratios.empty()) {
+      std::sort(ratios.begin(), ratios.end());
+      const auto at = [&](double q) { return ratios[static_cast<std::size_t>(q * static_cast<double>(ratios.size() - 1) + 0.5)]; };
+      report.filter_covariance_ratio = Vec3(at(0.5), at(0.1), at(0.9));
+    }
   }
 
   const auto write_start = Clock::now();

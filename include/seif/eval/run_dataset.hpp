@@ -73,6 +73,10 @@ struct RunReport {
   std::optional<SmootherReport> smoother;     ///< a smoother's solve
   std::optional<RunErrors> filter_errors;     ///< with `smooth`: the filter's, before the batch
   std::optional<double> filter_map_distance;  ///< with `smooth`: RMS distance of the filter's map from the batch's [m]
+  /// With `smooth`: over the landmarks, trace(filter's covariance) / trace(batch's), median
+  /// and 10th / 90th percentile. The batch's marginals under the same models are the honest
+  /// reference: below 1 the filter claims too little variance.
+  std::optional<Vec3> filter_covariance_ratio;
   std::optional<AssociationCounts> association;  ///< with nn or jcbb (or drop_unlabelled): what the association did
   /// With nn or jcbb on data with ground-truth poses and landmarks: what the true map and
   /// poses would associate (eval/association_ceiling.hpp).
