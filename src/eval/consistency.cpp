@@ -264,8 +264,7 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
       try {
         results[r].push_back(runOne(spec, run_data, config, start, samples, world.seed, options.posterior_mean));
       } catch (const NumericError& e) {  // the filter diverged: this run's figures are NaN, the study goes on
-        FilterRun failed;
-        failed.own.nees.assign(samples.size(), kNoNees);
+        FilterRun failed;  // summarise() reads a stopped run as NaN throughout
         failed.failure = e.what();
         results[r].push_back(std::move(failed));
       } catch (const std::exception& e) {

@@ -1,6 +1,7 @@
 // `seif run` as one library call (include/seif/eval/run_dataset.hpp).
 #include <seif/core/errors.hpp>
 #include <seif/core/version.hpp>
+#include <seif/eval/bench.hpp>
 #include <seif/eval/run_dataset.hpp>
 #include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
@@ -297,9 +298,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
       if (batch > 0.0) ratios.push_back(filtered->landmarkCovariance(id).trace() / batch);
     }
     if (!ratios.empty()) {
-      std::sort(ratios.begin(), ratios.end());
-      const auto at = [&](double q) { return ratios[static_cast<std::size_t>(q * static_cast<double>(ratios.size() - 1) + 0.5)]; };
-      report.filter_covariance_ratio = Vec3(at(0.5), at(0.1), at(0.9));
+      report.filter_covariance_ratio = Vec3(quantile(ratios, 0.5), quantile(ratios, 0.1), quantile(ratios, 0.9));
     }
   }
 

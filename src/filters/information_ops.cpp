@@ -10,7 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <memory>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 
@@ -251,14 +251,10 @@ class BlanketIndex {
   std::vector<int> members_;
 };
 
-}  // namespace
-
-namespace {
-
 /// The buffers of a local marginal query, kept per thread across queries: the blanket's
 /// members, each member's links (the inner vectors keep their capacity), the frontier and
-/// the dense H. A query made while another runs on the same thread (a callback's own query)
-/// takes the next one.
+/// the dense H. No callback of a query makes another query on the same thread; take()
+/// refuses one that would.
 struct BlanketWorkspace {
   std::vector<int> order;
   std::vector<std::vector<BlanketLink>> links;
@@ -266,6 +262,7 @@ struct BlanketWorkspace {
   std::vector<std::pair<double, int>> offered, frontier;
   std::vector<Eigen::Index> offset;
   std::vector<double> h;  // H's storage, n x n column-major
+  bool busy = false;
 
   std::vector<BlanketLink>& nextLinks() {
     if (members == links.size()) links.emplace_back();
@@ -275,30 +272,27 @@ struct BlanketWorkspace {
   }
 };
 
+/// This thread's workspace, emptied, for the life of the object.
 class WorkspaceLease {
  public:
-  WorkspaceLease() {
-    if (depth() == pool().size()) pool().push_back(std::make_unique<BlanketWorkspace>());
-    ws_ = pool()[depth()++].get();
-    ws_->order.clear();
-    ws_->members = 0;
-    ws_->frontier.clear();
+  WorkspaceLease() : ws_(workspace()) {
+    if (ws_.busy) throw std::logic_error("localMarginalCovariance: a query inside a query on one thread");
+    ws_.busy = true;
+    ws_.order.clear();
+    ws_.members = 0;
+    ws_.frontier.clear();
   }
-  ~WorkspaceLease() { --depth(); }
+  ~WorkspaceLease() { ws_.busy = false; }
   WorkspaceLease(const WorkspaceLease&) = delete;
   WorkspaceLease& operator=(const WorkspaceLease&) = delete;
-  BlanketWorkspace& operator*() const { return *ws_; }
+  BlanketWorkspace& operator*() const { return ws_; }
 
  private:
-  static std::vector<std::unique_ptr<BlanketWorkspace>>& pool() {
-    thread_local std::vector<std::unique_ptr<BlanketWorkspace>> p;
-    return p;
+  static BlanketWorkspace& workspace() {
+    thread_local BlanketWorkspace w;
+    return w;
   }
-  static std::size_t& depth() {
-    thread_local std::size_t d = 0;
-    return d;
-  }
-  BlanketWorkspace* ws_;
+  BlanketWorkspace& ws_;
 };
 
 }  // namespace
