@@ -44,9 +44,9 @@ class ArchiveWriter {
   void count(std::size_t n) { u64(n); }
   /// `n` doubles, bit-exact.
   void f64s(const double* v, std::size_t n);
-  /// A fixed-size matrix (its coefficients in storage order).
-  template <int R, int C>
-  void fixed(const Eigen::Matrix<double, R, C>& m) {
+  /// A fixed-size matrix (its coefficients in storage order; aligned or not).
+  template <int R, int C, int Options>
+  void fixed(const Eigen::Matrix<double, R, C, Options>& m) {
     f64s(m.data(), static_cast<std::size_t>(R * C));
   }
   /// A dynamic matrix or vector: rows, cols, coefficients.
@@ -84,8 +84,8 @@ class ArchiveReader {
   std::size_t count(const char* what, std::size_t min_bytes);
   void f64s(const char* what, double* v, std::size_t n);
   /// With `finite`, a NaN or infinity is an error (a filter's state never holds one).
-  template <int R, int C>
-  void fixed(const char* what, Eigen::Matrix<double, R, C>& m, bool finite = false) {
+  template <int R, int C, int Options>
+  void fixed(const char* what, Eigen::Matrix<double, R, C, Options>& m, bool finite = false) {
     f64s(what, m.data(), static_cast<std::size_t>(R * C));
     if (finite && !m.allFinite()) notFinite(what);
   }

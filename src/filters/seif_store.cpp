@@ -99,7 +99,7 @@ void SeifStore::assignMean(int slot, const Vec2& mean) {
   }
 }
 
-Mat2& SeifStore::writeLink(int slot, std::size_t index) {
+SeifStore::LinkBlock& SeifStore::writeLink(int slot, std::size_t index) {
   Link& l = nodes_[static_cast<std::size_t>(slot)].links[index];
   Journal& j = journal_;
   // Saved on every change (restored latest first, so the earliest value wins): cheaper than
@@ -164,7 +164,7 @@ void SeifStore::requireNoTransaction(const char* what) const {
 
 // ---------------------------------------------------------------- links ---------------
 
-Mat2* SeifStore::link(int a, int c) {
+SeifStore::LinkBlock* SeifStore::link(int a, int c) {
   const std::vector<Link>& links = write(a).links;
   for (std::size_t i = 0; i < links.size(); ++i) {
     if (links[i].slot == c) return &writeLink(a, i);
@@ -172,7 +172,7 @@ Mat2* SeifStore::link(int a, int c) {
   return nullptr;
 }
 
-const Mat2* SeifStore::findLink(int a, int c) const {
+const SeifStore::LinkBlock* SeifStore::findLink(int a, int c) const {
   for (const Link& l : node(a).links) {
     if (l.slot == c) return &l.H;
   }
@@ -180,7 +180,7 @@ const Mat2* SeifStore::findLink(int a, int c) const {
 }
 
 void SeifStore::addToLink(int a, int c, const Mat2& H_ac) {
-  if (Mat2* h = link(a, c)) {
+  if (LinkBlock* h = link(a, c)) {
     *h += H_ac;
     *link(c, a) += H_ac.transpose();
     return;
@@ -374,7 +374,7 @@ void SeifStore::mergeLandmarks(int keep, int drop) {
   const Node d = nodes_[static_cast<std::size_t>(drop)];  // a copy: links change below
   // H'_kk = H_kk + H_kd + H_dk + H_dd, b'_k = b_k + b_d.
   k.H += d.H;
-  if (const Mat2* H_kd = findLink(keep, drop)) {
+  if (const LinkBlock* H_kd = findLink(keep, drop)) {
     const Mat2 kd = *H_kd;
     nodes_[static_cast<std::size_t>(keep)].H += kd + kd.transpose();
   }
@@ -473,6 +473,32 @@ class SeifStore::GatheredMarks {
   SeifStore& store_;
 };
 
+namespace {
+/// A link of a gathered landmark to another gathered one: its index in the landmark's links
+/// and the other's position in the block.
+struct BlockLink {
+  int index;
+  int position;
+};
+using BlockLinks = std::array<BlockLink, kMaxLocalLandmarks + 1>;  // one spare: written, not kept
+
+/// The links of `links` whose other end is gathered at a position after `after`, in their
+/// order; returns how many. Without a branch per link: each is written and kept only when
+/// it counts (a landmark has ~10^2 links, a handful in the block, and a branch on each
+/// mispredicted about as often as it is taken cost more than the loop's loads).
+template <typename PositionOf>
+int linksInBlock(const std::vector<SeifStore::Link>& links, int after, const PositionOf& position_of, BlockLinks& out) {
+  int count = 0;
+  const int n = static_cast<int>(links.size());
+  for (int e = 0; e < n; ++e) {
+    const int j = position_of(links[static_cast<std::size_t>(e)].slot);
+    out[static_cast<std::size_t>(count)] = {e, j};
+    count += j > after ? 1 : 0;
+  }
+  return count;
+}
+}  // namespace
+
 void SeifStore::gather(std::span<const int> slots) {
   gathered_.assign(slots.begin(), slots.end());
   gatherListed();
@@ -536,6 +562,8 @@ void SeifStore::gatherListed() {
                                 " landmarks");
   }
   const GatheredMarks marks(*this);
+  const auto position_of = [this](int slot) { return nodes_[static_cast<std::size_t>(slot)].gathered; };
+  BlockLinks block_links;
   const int n = 3 + 2 * k;
   local_H_.setZero(n, n);
   local_b_.resize(n);
@@ -555,12 +583,14 @@ void SeifStore::gatherListed() {
       local_H_.block<3, 2>(0, r) = H_xl;
       local_H_.block<2, 3>(r, 0) = H_xl.transpose();
     }
-    for (const Link& l : n_a.links) {  // H_{a,c} from a's side for each later c in the block
-      const int j = nodes_[static_cast<std::size_t>(l.slot)].gathered;
-      if (j <= i) continue;
-      const int c = 3 + 2 * j;
-      local_H_.block<2, 2>(r, c) = l.H;
-      local_H_.block<2, 2>(c, r) = l.H.transpose();
+    // H_{a,c} from a's side for each later c in the block
+    const int in_block = linksInBlock(n_a.links, i, position_of, block_links);
+    for (int e = 0; e < in_block; ++e) {
+      const BlockLink& bl = block_links[static_cast<std::size_t>(e)];
+      const LinkBlock& H_ac = n_a.links[static_cast<std::size_t>(bl.index)].H;
+      const int c = 3 + 2 * bl.position;
+      local_H_.block<2, 2>(r, c) = H_ac;
+      local_H_.block<2, 2>(c, r) = H_ac.transpose();
     }
   }
   blocks_touched_ += static_cast<std::size_t>((k + 1) * (k + 1));
@@ -590,6 +620,8 @@ void SeifStore::scatter() {
   std::array<std::bitset<kMaxLocalLandmarks>, kMaxLocalLandmarks> linked{};
   {
     const GatheredMarks marks(*this);
+    const auto position_of = [this](int slot) { return nodes_[static_cast<std::size_t>(slot)].gathered; };
+    BlockLinks block_links;
     for (int i = 0; i < k; ++i) {
       const auto a = static_cast<std::size_t>(i);
       Node& node = write(gathered_[a]);
@@ -599,13 +631,14 @@ void SeifStore::scatter() {
       node.b = local_b_.segment<2>(r);
       node.mu = storedMean(local_mu_.segment<2>(r), node.ref);
       if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
-      for (std::size_t e = 0; e < node.links.size(); ++e) {
-        const int j = nodes_[static_cast<std::size_t>(node.links[e].slot)].gathered;
-        if (j < 0) continue;
+      const int in_block = linksInBlock(node.links, -1, position_of, block_links);
+      for (int m = 0; m < in_block; ++m) {
+        const auto e = static_cast<std::size_t>(block_links[static_cast<std::size_t>(m)].index);
+        const int j = block_links[static_cast<std::size_t>(m)].position;
         linked[static_cast<std::size_t>(std::min(i, j))].set(static_cast<std::size_t>(std::max(i, j)));
         const Mat2 H_ij =
             i < j ? Mat2(local_H_.block<2, 2>(r, 3 + 2 * j)) : Mat2(local_H_.block<2, 2>(3 + 2 * j, r).transpose());
-        Mat2& stored = writeLink(gathered_[a], e);
+        LinkBlock& stored = writeLink(gathered_[a], e);
         if (row_kept[a]) row_change[a].noalias() += (H_ij - stored) * basis[static_cast<std::size_t>(j)];
         stored = H_ij;
       }
@@ -772,7 +805,7 @@ Eigen::SparseMatrix<double> SeifStore::lowerInformation() const {
   }
   Eigen::SparseMatrix<double> H(n, n);
   H.reserve(Eigen::Map<const Eigen::VectorXi>(count.data(), n));
-  std::vector<std::pair<int, const Mat2*>> below;  // a landmark's links to later slots, sorted
+  std::vector<std::pair<int, const LinkBlock*>> below;  // a landmark's links to later slots, sorted
   for (int c = 0; c < 3; ++c) {
     for (int r = c; r < 3; ++r) H.insert(r, c) = H_xx_(r, c);
   }

@@ -18,9 +18,11 @@ namespace seif {
 
 class SeifStore {
  public:
+  // A link's block unaligned: 40 bytes a link instead of 48 (the relaxation streams them).
+  using LinkBlock = Eigen::Matrix<double, 2, 2, Eigen::DontAlign>;
   struct Link {
     int slot;
-    Mat2 H;  // H_{this, other}
+    LinkBlock H;  // H_{this, other}
   };
   struct RobotLink {
     int slot;
@@ -76,7 +78,7 @@ class SeifStore {
   /// The active landmarks, in no particular order (removeRobotLink() swaps in the last).
   const std::vector<RobotLink>& robotLinks() const { return robot_links_; }
   /// H_{a,c} of two landmark slots, or nullptr when they are not linked.
-  const Mat2* findLink(int a, int c) const;
+  const LinkBlock* findLink(int a, int c) const;
   /// H as a sparse matrix, b and mu, in the state order [x, y, th, landmarks...].
   Eigen::SparseMatrix<double> sparseInformation() const;
   /// Its lower triangle (what a sparse Cholesky factorisation reads), built in place in
@@ -252,10 +254,10 @@ class SeifStore {
   Vec2& writeMean(int slot);
   /// The value of link `index` of landmark `slot` for a change (write(slot) first): its value
   /// saved first when a transaction is open.
-  Mat2& writeLink(int slot, std::size_t index);
+  LinkBlock& writeLink(int slot, std::size_t index);
   void requireNoTransaction(const char* what) const;
   /// H_{a,c} for a change (write(a)), or nullptr when they are not linked.
-  Mat2* link(int a, int c);
+  LinkBlock* link(int a, int c);
   void gatherListed();  // gather() of gathered_
   /// Marks each gathered landmark with its position (Node::gathered) for the life of the
   /// object, so that a node's links to the block are found in one pass over its links.
