@@ -494,6 +494,8 @@ int linksInBlock(const std::vector<SeifStore::Link>& links, int after, const Pos
     const int j = position_of(links[static_cast<std::size_t>(e)].slot);
     out[static_cast<std::size_t>(count)] = {e, j};
     count += j > after ? 1 : 0;
+    // At most one link per other gathered landmark; never taken, so never mispredicted.
+    if (count >= kMaxLocalLandmarks) throw std::logic_error("SeifStore: a landmark linked twice to one other");
   }
   return count;
 }
