@@ -482,16 +482,15 @@ struct BlockLink {
 };
 using BlockLinks = std::array<BlockLink, kMaxLocalLandmarks + 1>;  // one spare: written, not kept
 
-/// The links of `links` whose other end is gathered at a position after `after`, in their
-/// order; returns how many. Without a branch per link: each is written and kept only when
-/// it counts (a landmark has ~10^2 links, a handful in the block, and a branch on each
-/// mispredicted about as often as it is taken cost more than the loop's loads).
-template <typename PositionOf>
-int linksInBlock(const std::vector<SeifStore::Link>& links, int after, const PositionOf& position_of, BlockLinks& out) {
+/// The links of `node` whose other end is gathered (Node::gathered) at a position after
+/// `after`, in their order; returns how many. Without a branch per link: each is written and
+/// kept only when it counts (a landmark has ~10^2 links, a handful in the block, and a branch
+/// on each mispredicted about as often as it is taken cost more than the loop's loads).
+int linksInBlock(const std::vector<SeifStore::Node>& nodes, const SeifStore::Node& node, int after, BlockLinks& out) {
   int count = 0;
-  const int n = static_cast<int>(links.size());
+  const int n = static_cast<int>(node.links.size());
   for (int e = 0; e < n; ++e) {
-    const int j = position_of(links[static_cast<std::size_t>(e)].slot);
+    const int j = nodes[static_cast<std::size_t>(node.links[static_cast<std::size_t>(e)].slot)].gathered;
     out[static_cast<std::size_t>(count)] = {e, j};
     count += j > after ? 1 : 0;
     // At most one link per other gathered landmark; never taken, so never mispredicted.
@@ -564,7 +563,6 @@ void SeifStore::gatherListed() {
                                 " landmarks");
   }
   const GatheredMarks marks(*this);
-  const auto position_of = [this](int slot) { return nodes_[static_cast<std::size_t>(slot)].gathered; };
   BlockLinks block_links;
   const int n = 3 + 2 * k;
   local_H_.setZero(n, n);
@@ -586,7 +584,7 @@ void SeifStore::gatherListed() {
       local_H_.block<2, 3>(r, 0) = H_xl.transpose();
     }
     // H_{a,c} from a's side for each later c in the block
-    const int in_block = linksInBlock(n_a.links, i, position_of, block_links);
+    const int in_block = linksInBlock(nodes_, n_a, i, block_links);
     for (int e = 0; e < in_block; ++e) {
       const BlockLink& bl = block_links[static_cast<std::size_t>(e)];
       const LinkBlock& H_ac = n_a.links[static_cast<std::size_t>(bl.index)].H;
@@ -622,7 +620,6 @@ void SeifStore::scatter() {
   std::array<std::bitset<kMaxLocalLandmarks>, kMaxLocalLandmarks> linked{};
   {
     const GatheredMarks marks(*this);
-    const auto position_of = [this](int slot) { return nodes_[static_cast<std::size_t>(slot)].gathered; };
     BlockLinks block_links;
     for (int i = 0; i < k; ++i) {
       const auto a = static_cast<std::size_t>(i);
@@ -633,7 +630,7 @@ void SeifStore::scatter() {
       node.b = local_b_.segment<2>(r);
       node.mu = storedMean(local_mu_.segment<2>(r), node.ref);
       if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
-      const int in_block = linksInBlock(node.links, -1, position_of, block_links);
+      const int in_block = linksInBlock(nodes_, node, -1, block_links);
       for (int m = 0; m < in_block; ++m) {
         const auto e = static_cast<std::size_t>(block_links[static_cast<std::size_t>(m)].index);
         const int j = block_links[static_cast<std::size_t>(m)].position;
