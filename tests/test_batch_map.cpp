@@ -1,6 +1,7 @@
 // The batch MAP smoother: equal to the exact filter on a linear-Gaussian problem (with a
 // rank-2 process noise), one optimum from any start on the paper's world, better maps than
 // the EKF, and the smoother hooks of runFilter.
+#include "rel_diff.hpp"
 #include <seif/core/angles.hpp>
 #include <seif/core/errors.hpp>
 #include <seif/eval/run.hpp>
@@ -28,9 +29,7 @@ namespace {
 
 using namespace seif;
 
-double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  return (a - b).norm() / std::max(1e-300, b.norm());
-}
+using test::relDiff;
 
 /// delta = the OdometryIncrement's (dx, dy, dth) in the WORLD frame: J_delta_x = 0, U constant.
 class LinearMotion final : public MotionModel {

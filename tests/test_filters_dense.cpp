@@ -1,5 +1,6 @@
 // The reference filters: EKF == EIF over whole runs, invariants after every step,
 // bearing wrapping, information <-> moments round trips.
+#include "rel_diff.hpp"
 #include "scenario.hpp"
 
 #include <seif/core/errors.hpp>
@@ -15,9 +16,7 @@ namespace {
 
 using namespace seif;
 
-double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  return (a - b).norm() / std::max(1e-300, b.norm());
-}
+using test::relDiff;
 
 void expectSymmetricPositiveDefinite(const Eigen::MatrixXd& M, const std::string& what) {
   EXPECT_LE((M - M.transpose()).cwiseAbs().maxCoeff(), 1e-12 * M.cwiseAbs().maxCoeff()) << what;

@@ -2,6 +2,7 @@
 // src/filters/invariant.hpp; algorithm.md "anchors") and the iterated update
 // (FilterConfig::iterations): the algebra against dense and numeric references, EKF = EIF,
 // and the unobservable rotation staying unobserved.
+#include "rel_diff.hpp"
 #include "scenario.hpp"
 
 #include "filters/invariant.hpp"
@@ -39,9 +40,7 @@ Eigen::MatrixXd anchorMatrix(const Eigen::VectorXd& s) {
   return T;
 }
 
-double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  return (a - b).norm() / std::max(1e-300, b.norm());
-}
+using test::relDiff;
 
 TEST(Invariant, LeftJacobianSeriesMatchesTheClosedFormOnBothSides) {
   for (double t : {1e-3, 2e-4, 1.0001e-4, 0.9999e-4, 3e-5, 1e-7, 0.0}) {

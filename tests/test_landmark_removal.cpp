@@ -1,6 +1,7 @@
 // Exact removal and merge of landmarks in every filter's form, against the dense
 // computation on the same posterior: removal = the marginal over everything else (delete
 // the landmark's rows of Sigma); merge = conditioning on y_keep = y_drop, then removal.
+#include "rel_diff.hpp"
 #include "scenario.hpp"
 
 #include <seif/core/errors.hpp>
@@ -19,7 +20,7 @@ namespace {
 
 using namespace seif;
 
-double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
+using test::relDiff;
 
 /// The state order after deleting slot `slot` the way the filters do (the last slot moves in).
 std::vector<Eigen::Index> keptRows(Eigen::Index n, int slot) {

@@ -1,6 +1,7 @@
 // Marginal queries (SlamFilter::marginal, predictMeasurement) on every filter and mode
 // against the dense inverse of the information matrix; the information-form motion update
 // with a full 3x3 motion Jacobian against the EKF; update() all or nothing.
+#include "rel_diff.hpp"
 #include "scenario.hpp"
 
 #include <seif/core/errors.hpp>
@@ -107,7 +108,7 @@ Eigen::MatrixXd restrictedInverse(const Eigen::MatrixXd& H, const std::vector<Ei
       .topLeftCorner(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
 }
 
-double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
+using test::relDiff;
 
 class MarginalsOfEveryFilter : public ::testing::TestWithParam<std::string> {};
 

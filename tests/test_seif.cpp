@@ -1,5 +1,6 @@
 // The SEIF: exact where the paper is exact, the sparsification's guarantees, invariants
 // after every step, and convergence of the amortised mean.
+#include "rel_diff.hpp"
 #include "scenario.hpp"
 #include "seif_steps.hpp"
 
@@ -22,9 +23,7 @@ namespace {
 
 using namespace seif;
 
-double relDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  return (a - b).norm() / std::max(1e-300, b.norm());
-}
+using test::relDiff;
 
 using test::configFor;
 
@@ -98,6 +97,40 @@ TEST(Sparsification, ZeroesTheRobotLinksAndKeepsTheMeanOnRandomBlocks) {
     ASSERT_EQ(llt.info(), Eigen::Success) << "sparsified H is not positive definite";
     EXPECT_LT(relDiff(llt.solve(bs), mu), 1e-9);
     EXPECT_LT((Hs - Hs.transpose()).cwiseAbs().maxCoeff(), 1e-12 * H.cwiseAbs().maxCoeff());
+  }
+}
+
+TEST(Sparsification, TheClosedFormIsThePapersThreeTerms) {
+  // sparsifyInformation() computes eq. (44-51) as two rank-3 updates; here the three terms
+  // are formed as the paper writes them, with dense inverses.
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> n01;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int keep = 1 + trial % 30, drop = 1 + trial % 3;
+    const int n = 3 + 2 * (keep + drop), d = 2 * drop, y0 = n - d;
+    Eigen::MatrixXd A(n, n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) A(i, j) = n01(rng);
+    Eigen::MatrixXd H = A * A.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n);
+    H = (0.5 * (H + H.transpose())).eval();  // exactly symmetric
+    Eigen::VectorXd mu(n);
+    for (int i = 0; i < n; ++i) mu(i) = n01(rng);
+    const Eigen::VectorXd b = H * mu + Eigen::VectorXd::Ones(n);  // any b: bs - b = (Hs - H) mu
+    std::vector<Eigen::Index> xy0{0, 1, 2};
+    for (Eigen::Index i = y0; i < n; ++i) xy0.push_back(i);
+    const Eigen::MatrixXd H_cols = H(Eigen::all, xy0);
+    const Eigen::MatrixXd T2 = H_cols * H(xy0, xy0).inverse() * H_cols.transpose();
+    const Eigen::MatrixXd T1 = H.rightCols(d) * H.bottomRightCorner(d, d).inverse() * H.bottomRows(d);
+    const Eigen::MatrixXd T3 = H.leftCols(3) * H.topLeftCorner(3, 3).inverse() * H.topRows(3);
+    const Eigen::MatrixXd expected = H - T1 + T2 - T3;
+    Eigen::MatrixXd Hs = H;
+    Eigen::VectorXd bs = b;
+    sparsifyInformation(Hs, bs, mu, drop);
+    const double scale = H.cwiseAbs().maxCoeff();
+    EXPECT_LT((Hs - expected).cwiseAbs().maxCoeff(), 1e-10 * scale) << "trial " << trial;
+    EXPECT_LT((bs - b - (expected - H) * mu).cwiseAbs().maxCoeff(), 1e-10 * scale * mu.cwiseAbs().maxCoeff())
+        << "trial " << trial;
+    EXPECT_EQ(Hs, Hs.transpose()) << "trial " << trial;
   }
 }
 

@@ -77,19 +77,20 @@ void informationMotionUpdate(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Ve
 
 namespace {
 
-/// The gauge-keeping correction of a sparsification's change (information_ops.hpp): H0 + change
-/// is the paper's result, [C U 0] its robot rows. Written as the marginal of the landmarks times
-/// the robot's conditional, that conditional's residual is x - m(Y+) with
+/// The gauge-keeping correction of a sparsification's change (information_ops.hpp). H0 holds
+/// the block's robot rows before it; H + change is the paper's result, [C U 0] its robot rows.
+/// Written as the marginal of the landmarks times the robot's conditional, that conditional's residual is x - m(Y+) with
 /// m(Y+) = -C^-1 U Y+; the exact one's is A z with A = H_xx^-1 [H_xx, H_xY]. Replacing U by
 /// U + D with D V_+ = C H_xx^-1 (H0 V)_x - C V_x - U V_+ gives the new residual A V on the gauge
 /// directions V, so V^T (Hs - H0) V = (A V)^T (C - H_xx) (A V) <= 0: the rule claims nothing
 /// on them (for a gauge H0 leaves free, H0 V = 0, Hs V = 0). D is the least such change; a
 /// direction V_+ cannot carry (one landmark in Y+ cannot carry a rotation) is left as the
 /// paper's rule leaves it.
-void keepGauge(const LocalMatrix& H0, const Eigen::LLT<Mat3>& llt_x, LocalMatrix& change,
-               const Eigen::Ref<const Eigen::MatrixXd>& gauge, Eigen::Index d) {
+void keepGauge(const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim>& H0,
+               const Eigen::LLT<Mat3>& llt_x, LocalMatrix& change, const Eigen::Ref<const Eigen::MatrixXd>& gauge,
+               Eigen::Index d) {
   using Rows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim>;
-  const Eigen::Index n = H0.rows(), p = n - 3 - d;
+  const Eigen::Index n = H0.cols(), p = n - 3 - d;
   if (p < 2) return;
   // Columns made orthogonal over Y+ in their order (the translations first), so that a
   // direction Y+ cannot carry (a rotation with one landmark kept) drops out alone.
@@ -137,32 +138,38 @@ double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Vect
     throw NumericError("sparsification: bad block layout (" + std::to_string(n) + " rows, " +
                        std::to_string(drop) + " to deactivate)");
   }
-  const LocalMatrix H0 = H;
-  // T1 = H0 S_Y0 (S_Y0^T H0 S_Y0)^-1 S_Y0^T H0
-  Eigen::LLT<LocalMatrix> llt_y0(H0.bottomRightCorner(d, d));
-  // T2 = H0 S_xY0 (S_xY0^T H0 S_xY0)^-1 S_xY0^T H0, with xY0 = rows {0..2} u {y0..n-1}
-  const Eigen::Index m = 3 + d;
-  LocalMatrix H0_cols(n, m);  // H0 S_xY0
-  H0_cols.leftCols(3) = H0.leftCols(3);
-  H0_cols.rightCols(d) = H0.rightCols(d);
-  LocalMatrix H0_xy0(m, m);  // S_xY0^T H0 S_xY0
-  H0_xy0.topRows(3) = H0_cols.topRows(3);
-  H0_xy0.bottomRows(d) = H0_cols.bottomRows(d);
-  Eigen::LLT<LocalMatrix> llt_xy0(H0_xy0);
-  // T3 = H S_x H_xx^-1 S_x^T H
-  Eigen::LLT<Mat3> llt_x(H0.topLeftCorner<3, 3>());
-  if (llt_y0.info() != Eigen::Success || llt_xy0.info() != Eigen::Success ||
-      llt_x.info() != Eigen::Success) {
+  // Eq. (44-51) in closed form. With C = H S_x, B = H S_Y0 and W = H_Y0Y0^-1 H_Y0x, block
+  // elimination of S_xY0^T H S_xY0 gives
+  //   H S_xY0 (S_xY0^T H S_xY0)^-1 S_xY0^T H - H S_Y0 (S_Y0^T H S_Y0)^-1 S_Y0^T H = D S^-1 D^T
+  // with D = C - B W (its Y0 rows vanish) and S = H_xx - H_xY0 W (D's robot rows), so that
+  //   Hs - H = D S^-1 D^T - C H_xx^-1 C^T = E E^T - F F^T,  E = D U_S^-1, F = C U_x^-1
+  // (U^T U the Cholesky factors of S and H_xx): two symmetric rank-3 updates.
+  using Cols3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::ColMajor, kMaxLocalDim, 3>;
+  using Rows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim>;
+  const Eigen::LLT<LocalMatrix> llt_y0(H.bottomRightCorner(d, d));
+  const Eigen::LLT<Mat3> llt_x(H.topLeftCorner<3, 3>());
+  if (llt_y0.info() != Eigen::Success || llt_x.info() != Eigen::Success) {
     throw NumericError("sparsification: an information block is not positive definite");
   }
-  LocalMatrix change = H0_cols * llt_xy0.solve(H0_cols.transpose());
-  change.noalias() -= H0.rightCols(d) * llt_y0.solve(H0.bottomRows(d));
-  change.noalias() -= H0.leftCols(3) * llt_x.solve(H0.topRows(3));
-  change = (0.5 * (change + change.transpose())).eval();
-  if (gauge.cols() > 0) keepGauge(H0, llt_x, change, gauge, d);
+  Cols3 E = H.leftCols<3>();
+  E.noalias() -= H.rightCols(d) * llt_y0.solve(H.bottomLeftCorner(d, 3));  // D
+  const Eigen::LLT<Mat3> llt_s(E.topRows<3>());  // S
+  if (llt_s.info() != Eigen::Success) {
+    throw NumericError("sparsification: an information block is not positive definite");
+  }
+  llt_s.matrixU().solveInPlace<Eigen::OnTheRight>(E);
+  Cols3 F = H.leftCols<3>();
+  llt_x.matrixU().solveInPlace<Eigen::OnTheRight>(F);
+  LocalMatrix change = LocalMatrix::Zero(n, n);
+  change.selfadjointView<Eigen::Lower>().rankUpdate(E, 1.0).rankUpdate(F, -1.0);
+  change.triangularView<Eigen::StrictlyUpper>() = change.transpose();
+  const double scale = H.cwiseAbs().maxCoeff();
+  if (gauge.cols() > 0) {
+    const Rows3 H0_x = H.topRows<3>();
+    keepGauge(H0_x, llt_x, change, gauge, d);
+  }
   H += change;
   b.noalias() += change * mu;
-  const double scale = H0.cwiseAbs().maxCoeff();
   return H.block(0, y0, 3, d).cwiseAbs().maxCoeff() / scale;
 }
 

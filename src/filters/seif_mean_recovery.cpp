@@ -8,7 +8,7 @@
 
 namespace seif {
 
-void SeifSlam::recoverMean(bool with_active) {
+void SeifSlam::recoverMean(bool with_active, bool block_solved) {
   // §2: one block Gauss-Seidel pass over the active landmarks, the robot and K others.
   // In a map much larger than the caches, relaxing a random landmark costs three dependent
   // cache misses (SeifStore::relaxLandmarks). The K landmarks are therefore drawn first (the
@@ -33,7 +33,9 @@ void SeifSlam::recoverMean(bool with_active) {
   };
   int chunk = std::min(random, kChunk);
   draw(chunk);
-  if (with_active) {
+  if (block_solved) {
+    // deactivateSurplus() solved the block last, and nothing has changed since.
+  } else if (with_active) {
     store_.relaxActive();
   } else {
     store_.relaxRobot();
@@ -51,6 +53,7 @@ void SeifSlam::recoverMean(bool with_active) {
 
 void SeifSlam::relaxMean(int sweeps) {
   settleMotion();
+  block_mean_solved_ = false;
   for (int s = 0; s < sweeps; ++s) {
     store_.relaxRobot();
     for (int i = 0; i < store_.size(); ++i) store_.relaxLandmark(i);
@@ -64,5 +67,8 @@ std::optional<Eigen::VectorXd> SeifSlam::posteriorMean() const {
   return exactMean();
 }
 
-void SeifSlam::recoverExactMean() { store_.setMean(exactMean()); }
+void SeifSlam::recoverExactMean() {
+  block_mean_solved_ = false;
+  store_.setMean(exactMean());
+}
 }  // namespace seif

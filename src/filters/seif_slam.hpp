@@ -142,8 +142,10 @@ class SeifSlam final : public SlamFilter {
   /// The robot's mean with any deferred motion: the store's plus the held increment.
   Vec3 robotMean() const;
   /// §2, amortised, eq. (42); without `with_active` the robot alone and the K landmarks
-  /// (updates without observations while motion is deferred, after the first).
-  void recoverMean(bool with_active = true);
+  /// (updates without observations while motion is deferred, after the first). With
+  /// `block_solved` (block_mean_solved_) the K landmarks alone: the robot-active block's
+  /// solve would give its mean back up to rounding.
+  void recoverMean(bool with_active = true, bool block_solved = false);
   void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
   /// §3, eq. (21-22). Returns whether its iterations left the store's gathered block
   /// holding the active set, current (deactivateSurplus() can then reorder it).
@@ -237,6 +239,11 @@ class SeifSlam final : public SlamFilter {
   LocalGauge gauge_;                 // the block's free directions (keepGauge)
   BoundWorkspace bound_ws_;
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
+  /// The last update ended with deactivateSurplus() solving the robot-active block's mean
+  /// jointly (then eq. 44-51 keep it: b~ = b + (H~ - H) mu), and nothing has changed the
+  /// store since: the robot and the active landmarks already solve their block given the
+  /// rest, and the next update's mean recovery need not solve it again.
+  bool block_mean_solved_ = false;
 
   /// The sparse Cholesky factor of H and its selected inverse, built on first use after H
   /// changed: exact means and marginal covariances.

@@ -212,6 +212,7 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
   }
   out.f64(f.information_scale_);  // Sparsify::Conservative's kappa
   out.u64(f.scalings_);
+  out.u64(f.block_mean_solved_ ? 1 : 0);  // the next update skips that block's solve
 }
 
 void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
@@ -254,6 +255,8 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
     if (!(f.information_scale_ >= 1.0) || !std::isfinite(f.information_scale_)) in.fail("information scale must be finite and >= 1");
     f.scalings_ = static_cast<std::size_t>(in.u64("information scalings"));
   }
+  // Earlier files: solved again (the same mean up to rounding).
+  f.block_mean_solved_ = in.version() >= 10 && in.u64Max("solved robot-active block", 1) == 1;
   f.invalidateFactor();
 }
 
