@@ -286,11 +286,12 @@ TEST(SeifStore, RejectsALandmarkListedTwiceInABlockAndStaysUsable) {
   const Eigen::MatrixXd H_before(f.store.sparseInformation());
   const std::vector<int> twice{0, 2, 0};
   EXPECT_THROW(f.store.gather(twice), seif::InvalidArgument);
-  for (int s = 0; s < 4; ++s) EXPECT_EQ(f.store.node(s).gathered, -1) << s;
+  // A position mark left behind would refuse the next block as listing a landmark twice.
   const std::vector<int> order{2, 0, 1};
-  f.store.gather(order);
+  EXPECT_NO_THROW(f.store.gather(order));
   f.store.scatter();
-  for (int s = 0; s < 4; ++s) EXPECT_EQ(f.store.node(s).gathered, -1) << s;
+  EXPECT_NO_THROW(f.store.gather(order));
+  f.store.scatter();
   EXPECT_EQ(Eigen::MatrixXd(f.store.sparseInformation()), H_before);
 }
 

@@ -453,8 +453,9 @@ void SeifStore::setMean(const Eigen::VectorXd& mu) {
 class SeifStore::GatheredMarks {
  public:
   explicit GatheredMarks(SeifStore& store) : store_(store) {
+    store.block_position_.resize(store.nodes_.size(), -1);  // -1 outside a gather: resized freely
     for (std::size_t i = 0; i < store.gathered_.size(); ++i) {
-      int& mark = store.nodes_[static_cast<std::size_t>(store.gathered_[i])].gathered;
+      int& mark = store.block_position_[static_cast<std::size_t>(store.gathered_[i])];
       if (mark >= 0) {
         clear(i);
         throw InvalidArgument("seif: a landmark listed twice in a local block");
@@ -468,7 +469,7 @@ class SeifStore::GatheredMarks {
 
  private:
   void clear(std::size_t count) {
-    for (std::size_t i = 0; i < count; ++i) store_.nodes_[static_cast<std::size_t>(store_.gathered_[i])].gathered = -1;
+    for (std::size_t i = 0; i < count; ++i) store_.block_position_[static_cast<std::size_t>(store_.gathered_[i])] = -1;
   }
   SeifStore& store_;
 };
@@ -482,15 +483,16 @@ struct BlockLink {
 };
 using BlockLinks = std::array<BlockLink, kMaxLocalLandmarks + 1>;  // one spare: written, not kept
 
-/// The links of `node` whose other end is gathered (Node::gathered) at a position after
-/// `after`, in their order; returns how many. Without a branch per link: each is written and
-/// kept only when it counts (a landmark has ~10^2 links, a handful in the block, and a branch
-/// on each mispredicted about as often as it is taken cost more than the loop's loads).
-int linksInBlock(const std::vector<SeifStore::Node>& nodes, const SeifStore::Node& node, int after, BlockLinks& out) {
+/// The links of `node` whose other end is gathered (`positions`: each landmark's position in
+/// the block, or -1) at a position after `after`, in their order; returns how many. Without a
+/// branch per link: each is written and kept only when it counts (a landmark has ~10^2 links,
+/// a handful in the block, and a branch on each mispredicted about as often as it is taken
+/// cost more than the loop's loads).
+int linksInBlock(const std::vector<int>& positions, const SeifStore::Node& node, int after, BlockLinks& out) {
   int count = 0;
   const int n = static_cast<int>(node.links.size());
   for (int e = 0; e < n; ++e) {
-    const int j = nodes[static_cast<std::size_t>(node.links[static_cast<std::size_t>(e)].slot)].gathered;
+    const int j = positions[static_cast<std::size_t>(node.links[static_cast<std::size_t>(e)].slot)];
     out[static_cast<std::size_t>(count)] = {e, j};
     count += j > after ? 1 : 0;
     // At most one link per other gathered landmark; never taken, so never mispredicted.
@@ -584,7 +586,7 @@ void SeifStore::gatherListed() {
       local_H_.block<2, 3>(r, 0) = H_xl.transpose();
     }
     // H_{a,c} from a's side for each later c in the block
-    const int in_block = linksInBlock(nodes_, n_a, i, block_links);
+    const int in_block = linksInBlock(block_position_, n_a, i, block_links);
     for (int e = 0; e < in_block; ++e) {
       const BlockLink& bl = block_links[static_cast<std::size_t>(e)];
       const LinkBlock& H_ac = n_a.links[static_cast<std::size_t>(bl.index)].H;
@@ -630,7 +632,7 @@ void SeifStore::scatter() {
       node.b = local_b_.segment<2>(r);
       node.mu = storedMean(local_mu_.segment<2>(r), node.ref);
       if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
-      const int in_block = linksInBlock(nodes_, node, -1, block_links);
+      const int in_block = linksInBlock(block_position_, node, -1, block_links);
       for (int m = 0; m < in_block; ++m) {
         const auto e = static_cast<std::size_t>(block_links[static_cast<std::size_t>(m)].index);
         const int j = block_links[static_cast<std::size_t>(m)].position;

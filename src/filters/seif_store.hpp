@@ -30,7 +30,7 @@ class SeifStore {
     long last_seen;  // step() of its last observation
   };
   // The fields are ordered by when they are read. The first 48 bytes hold what a neighbour's
-  // visit reads (mu, ref: mean() is mu plus the frame offset at ref; active, gathered); with
+  // visit reads (mu, ref: mean() is mu plus the frame offset at ref; active); with
   // H and what relaxing the node itself adds (b, links) they fill the first 120, and with the
   // coarse level's row (relaxLandmark() reads it with SeifOptions::coarse) the first 176;
   // the bound, used only with SeifOptions::bounds, comes last.
@@ -39,8 +39,7 @@ class SeifStore {
     // The mean's coarse level (enableCoarse(); seif_store_coarse.cpp): where its rigid
     // motions are taken (its mean when it entered).
     Vec2 ref = Vec2::Zero();
-    int active = -1;    // position in robotLinks(), or -1 when passive
-    int gathered = -1;  // position in the local block while gather()/scatter() run, else -1
+    int active = -1;  // position in robotLinks(), or -1 when passive
     long mean_journaled = -1;  // the transaction that saved its mean last
     Mat2 H = Mat2::Zero();
     Vec2 b = Vec2::Zero();
@@ -259,7 +258,7 @@ class SeifStore {
   /// H_{a,c} for a change (write(a)), or nullptr when they are not linked.
   LinkBlock* link(int a, int c);
   void gatherListed();  // gather() of gathered_
-  /// Marks each gathered landmark with its position (Node::gathered) for the life of the
+  /// Marks each gathered landmark with its position (block_position_) for the life of the
   /// object, so that a node's links to the block are found in one pass over its links.
   class GatheredMarks;
   /// Links landmark `slot` to the robot (activates it) with a zero block; its position.
@@ -308,6 +307,9 @@ class SeifStore {
   LocalVector local_mu_;
   LocalVector local_rhs_;
   LocalVector local_passive_;     // sum over passive j of H_ij mu_j, per gathered row (solveLocalMean)
+  // Per landmark slot, its position in the block while gather()/scatter() run, else -1
+  // (GatheredMarks): 4 bytes a landmark, so the scans of links read a compact array.
+  std::vector<int> block_position_;
   bool passive_current_ = false;  // local_passive_ holds the gathered block's, in its order
   std::vector<std::pair<int, Vec2>> reanchor_q_;  // applyReanchor()'s landmark entries
 
