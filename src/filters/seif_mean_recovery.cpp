@@ -8,7 +8,7 @@
 
 namespace seif {
 
-void SeifSlam::recoverMean(bool with_active, bool block_solved) {
+void SeifSlam::recoverMean(bool with_active, ActiveBlock block) {
   // §2: one block Gauss-Seidel pass over the active landmarks, the robot and K others.
   // In a map much larger than the caches, relaxing a random landmark costs three dependent
   // cache misses (SeifStore::relaxLandmarks). The K landmarks are therefore drawn first (the
@@ -33,8 +33,10 @@ void SeifSlam::recoverMean(bool with_active, bool block_solved) {
   };
   int chunk = std::min(random, kChunk);
   draw(chunk);
-  if (block_solved) {
+  if (block == ActiveBlock::Solved) {
     // deactivateSurplus() solved the block last, and nothing has changed since.
+  } else if (with_active && block == ActiveBlock::Gathered) {
+    store_.solveLocalMean();  // applyMotion() left the block gathered: the same values
   } else if (with_active) {
     store_.relaxActive();
   } else {
@@ -53,7 +55,7 @@ void SeifSlam::recoverMean(bool with_active, bool block_solved) {
 
 void SeifSlam::relaxMean(int sweeps) {
   settleMotion();
-  block_mean_solved_ = false;
+  block_ = ActiveBlock::Stale;
   for (int s = 0; s < sweeps; ++s) {
     store_.relaxRobot();
     for (int i = 0; i < store_.size(); ++i) store_.relaxLandmark(i);
@@ -68,7 +70,7 @@ std::optional<Eigen::VectorXd> SeifSlam::posteriorMean() const {
 }
 
 void SeifSlam::recoverExactMean() {
-  block_mean_solved_ = false;
+  block_ = ActiveBlock::Stale;
   store_.setMean(exactMean());
 }
 }  // namespace seif

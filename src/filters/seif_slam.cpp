@@ -81,7 +81,7 @@ void SeifSlam::guarded(const Step& step) {
   const std::size_t pending_controls = pending_controls_;
   const double information_scale = information_scale_;
   const std::size_t scalings = scalings_;
-  const bool block_mean_solved = block_mean_solved_;
+  const ActiveBlock block = block_;
   store_.beginTransaction();
   try {
     step();
@@ -100,7 +100,9 @@ void SeifSlam::guarded(const Step& step) {
     pending_controls_ = pending_controls;
     information_scale_ = information_scale;
     scalings_ = scalings;
-    block_mean_solved_ = block_mean_solved;
+    // The store is as it was; the local block's buffers are not (a Solved block is a state of
+    // the store, a Gathered one of the buffers).
+    block_ = block == ActiveBlock::Solved ? block : ActiveBlock::Stale;
     invalidateFactor();
     throw;
   }
@@ -122,7 +124,6 @@ void SeifSlam::motionUpdate(const MotionIncrement& increment) {
 
 void SeifSlam::applyMotion(const MotionIncrement& m) {
   // §1: Lemma 3 on the {robot, active} block, the only part of H that motion changes.
-  block_mean_solved_ = false;
   store_.gatherActive();
   workspace_.resize(6, store_.localH().cols());
   // The store holds kappa H: the motion noise enters it as U / kappa (informationScale()).
@@ -132,6 +133,7 @@ void SeifSlam::applyMotion(const MotionIncrement& m) {
   store_.scatter();
   store_.moveRobotAnchor(m.delta.head<2>());  // T(a + d) T(a)^-1 is the standard G (invariant.hpp)
   invalidateFactor();
+  block_ = ActiveBlock::Gathered;  // the buffers hold what scatter() wrote
 }
 
 void SeifSlam::flushMotion() {
@@ -285,7 +287,8 @@ void SeifSlam::applyUpdate(std::span<const Observation> observations, const Meas
       // landmarks. Invariant: then the robot is re-anchored, as immediate motion re-anchors
       // it (every update, after the relaxation), at its mean before the held controls, so
       // their noise enters at a fresh anchor.
-      if (amortized) recoverMean(pending_controls_ <= 1, std::exchange(block_mean_solved_, false));
+      const ActiveBlock block = std::exchange(block_, ActiveBlock::Stale);
+      if (amortized) recoverMean(pending_controls_ <= 1, block);
       if (config_.linearization == Linearization::Invariant) {
         store_.reanchorRobot();
         invalidateFactor();  // H changed (a query settles the held motion first anyway)
@@ -294,8 +297,8 @@ void SeifSlam::applyUpdate(std::span<const Observation> observations, const Meas
     }
     flushMotion();
   }
-  const bool block_solved = std::exchange(block_mean_solved_, false);
-  if (amortized && book_order) recoverMean(true, block_solved);
+  const ActiveBlock block = std::exchange(block_, ActiveBlock::Stale);
+  if (amortized && book_order) recoverMean(true, block);
   if (config_.linearization == Linearization::Invariant) reanchor(observations);
   if (options_.sparsify == SeifOptions::Sparsify::Eseif) {
     eseifUpdate(observations, sensor);
@@ -348,7 +351,7 @@ void SeifSlam::reanchorLandmark(int slot, const Vec2& to) {
 void SeifSlam::removeLandmark(int id) {
   const int slot = book_.require(id);
   settleMotion();
-  block_mean_solved_ = false;
+  block_ = ActiveBlock::Stale;
   // An active landmark is deactivated first: marginalised while linked to the robot, it
   // would link the robot to all its neighbours (more than a local block holds, on a dense map).
   if (store_.node(slot).active >= 0) deactivateSurplus(false, slot);
@@ -362,7 +365,7 @@ void SeifSlam::mergeLandmarks(int keep, int drop) {
   const int k = book_.require(keep), d = book_.require(drop);
   if (k == d) throw InvalidArgument("seif: cannot merge landmark " + std::to_string(keep) + " with itself");
   settleMotion();
-  block_mean_solved_ = false;
+  block_ = ActiveBlock::Stale;
   if (config_.linearization == Linearization::Invariant) {
     // One variable, one anchor: one of the two is re-anchored to the other's, which links
     // its neighbours to the robot. When neither fits in a local block even after a

@@ -141,11 +141,16 @@ class SeifSlam final : public SlamFilter {
   void settleMotion() const;
   /// The robot's mean with any deferred motion: the store's plus the held increment.
   Vec3 robotMean() const;
+  /// What the store's robot-active block is at the start of an update (block_):
+  /// Stale - read it again; Gathered - applyMotion() left it gathered as the store holds it
+  /// (its solve needs no gather); Solved - the last update's sparsification solved its mean
+  /// and keeps it (b~ = b + (H~ - H) mu within the block), so solving it again would give the
+  /// mean back up to rounding.
+  enum class ActiveBlock { Stale, Gathered, Solved };
   /// §2, amortised, eq. (42); without `with_active` the robot alone and the K landmarks
-  /// (updates without observations while motion is deferred, after the first). With
-  /// `block_solved` (block_mean_solved_) the K landmarks alone: the robot-active block's
-  /// solve would give its mean back up to rounding.
-  void recoverMean(bool with_active = true, bool block_solved = false);
+  /// (updates without observations while motion is deferred, after the first); with the
+  /// block Solved the K landmarks alone.
+  void recoverMean(bool with_active = true, ActiveBlock block = ActiveBlock::Stale);
   void recoverExactMean();                                 ///< mu = H^-1 b, sparse Cholesky
   /// §3, eq. (21-22). Returns whether its iterations left the store's gathered block
   /// holding the active set, current (deactivateSurplus() can then reorder it).
@@ -239,11 +244,9 @@ class SeifSlam final : public SlamFilter {
   LocalGauge gauge_;                 // the block's free directions (keepGauge)
   BoundWorkspace bound_ws_;
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
-  /// The last update ended with deactivateSurplus() solving the robot-active block's mean
-  /// jointly (then eq. 44-51 keep it: b~ = b + (H~ - H) mu), and nothing has changed the
-  /// store since: the robot and the active landmarks already solve their block given the
-  /// rest, and the next update's mean recovery need not solve it again.
-  bool block_mean_solved_ = false;
+  /// The robot-active block as the next update finds it (ActiveBlock). Every change of the
+  /// store but the two that set it makes it Stale.
+  ActiveBlock block_ = ActiveBlock::Stale;
 
   /// The sparse Cholesky factor of H and its selected inverse, built on first use after H
   /// changed: exact means and marginal covariances.

@@ -67,7 +67,8 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot, bool bl
   // The block's rows hold H mu = b before eq. (44-51) and so after (b~ = b + (H~ - H) mu
   // within the block): the solved mean stands (Y0's rows included), unless conservative's
   // kappa changed what the store holds.
-  block_mean_solved_ = solve_active_mean_first && slot < 0 && options_.sparsify == SeifOptions::Sparsify::Seif;
+  block_ = solve_active_mean_first && slot < 0 && options_.sparsify == SeifOptions::Sparsify::Seif ? ActiveBlock::Solved
+                                                                                                      : ActiveBlock::Stale;
   if (options_.rho > 0.0) {  // SeifOptions::rho: H <- (1 - rho) H, kept as kappa (informationScale())
     information_scale_ /= 1.0 - options_.rho;
     ++scalings_;

@@ -212,7 +212,9 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
   }
   out.f64(f.information_scale_);  // Sparsify::Conservative's kappa
   out.u64(f.scalings_);
-  out.u64(f.block_mean_solved_ ? 1 : 0);  // the next update skips that block's solve
+  // Whether the next update skips that block's solve (a Gathered block is in buffers a
+  // checkpoint does not hold: it loads as Stale, and is read again to the same values).
+  out.u64(f.block_ == SeifSlam::ActiveBlock::Solved ? 1 : 0);
 }
 
 void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
@@ -256,7 +258,8 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
     f.scalings_ = static_cast<std::size_t>(in.u64("information scalings"));
   }
   // Earlier files: solved again (the same mean up to rounding).
-  f.block_mean_solved_ = in.version() >= 10 && in.u64Max("solved robot-active block", 1) == 1;
+  f.block_ = in.version() >= 10 && in.u64Max("solved robot-active block", 1) == 1 ? SeifSlam::ActiveBlock::Solved
+                                                                                   : SeifSlam::ActiveBlock::Stale;
   f.invalidateFactor();
 }
 
