@@ -79,7 +79,8 @@ namespace {
 
 /// The gauge-keeping correction of a sparsification's change (information_ops.hpp). H0 holds
 /// the block's robot rows before it; H + change is the paper's result, [C U 0] its robot rows.
-/// Written as the marginal of the landmarks times the robot's conditional, that conditional's residual is x - m(Y+) with
+/// Written as the marginal of the landmarks times the robot's conditional, that conditional's
+/// residual is x - m(Y+) with
 /// m(Y+) = -C^-1 U Y+; the exact one's is A z with A = H_xx^-1 [H_xx, H_xY]. Replacing U by
 /// U + D with D V_+ = C H_xx^-1 (H0 V)_x - C V_x - U V_+ gives the new residual A V on the gauge
 /// directions V, so V^T (Hs - H0) V = (A V)^T (C - H_xx) (A V) <= 0: the rule claims nothing
