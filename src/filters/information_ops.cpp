@@ -77,6 +77,10 @@ void informationMotionUpdate(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Ve
 
 namespace {
 
+/// Three rows or three columns of a local block (allocation-free).
+using Rows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim>;
+using Cols3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::ColMajor, kMaxLocalDim, 3>;
+
 /// The gauge-keeping correction of a sparsification's change (information_ops.hpp). H0 holds
 /// the block's robot rows before it; H + change is the paper's result, [C U 0] its robot rows.
 /// Written as the marginal of the landmarks times the robot's conditional, that conditional's
@@ -87,10 +91,8 @@ namespace {
 /// on them (for a gauge H0 leaves free, H0 V = 0, Hs V = 0). D is the least such change; a
 /// direction V_+ cannot carry (one landmark in Y+ cannot carry a rotation) is left as the
 /// paper's rule leaves it.
-void keepGauge(const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim>& H0,
-               const Eigen::LLT<Mat3>& llt_x, LocalMatrix& change, const Eigen::Ref<const Eigen::MatrixXd>& gauge,
-               Eigen::Index d) {
-  using Rows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim>;
+void keepGauge(const Rows3& H0, const Eigen::LLT<Mat3>& llt_x, LocalMatrix& change,
+               const Eigen::Ref<const Eigen::MatrixXd>& gauge, Eigen::Index d) {
   const Eigen::Index n = H0.cols(), p = n - 3 - d;
   if (p < 2) return;
   // Columns made orthogonal over Y+ in their order (the translations first), so that a
@@ -145,8 +147,6 @@ double sparsifyInformation(Eigen::Ref<Eigen::MatrixXd> H, Eigen::Ref<Eigen::Vect
   // with D = C - B W (its Y0 rows vanish) and S = H_xx - H_xY0 W (D's robot rows), so that
   //   Hs - H = D S^-1 D^T - C H_xx^-1 C^T = E E^T - F F^T,  E = D U_S^-1, F = C U_x^-1
   // (U^T U the Cholesky factors of S and H_xx): two symmetric rank-3 updates.
-  using Cols3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::ColMajor, kMaxLocalDim, 3>;
-  using Rows3 = Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::ColMajor, 3, kMaxLocalDim>;
   const Eigen::LLT<LocalMatrix> llt_y0(H.bottomRightCorner(d, d));
   const Eigen::LLT<Mat3> llt_x(H.topLeftCorner<3, 3>());
   if (llt_y0.info() != Eigen::Success || llt_x.info() != Eigen::Success) {
