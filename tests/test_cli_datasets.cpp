@@ -39,6 +39,10 @@ TEST(CliDatasets, VictoriaParkSeifBeatsDeadReckoningAgainstGps) {
   EXPECT_GT(m["gps_fixes"].get<int>(), 4400);
   EXPECT_LE(m["gps_rmse"].get<double>(), 3.0);
   EXPECT_LT(10.0 * m["gps_rmse"].get<double>(), m["dead_reckoning_gps_rmse"].get<double>());
+  // One fix jumps 141 m in 2.2 s (t = 1244.25 s); without it the RMSE is much smaller.
+  EXPECT_EQ(m["gps_jumps"], 1);
+  EXPECT_LT(m["gps_rmse_without_jumps"].get<double>(), m["gps_rmse"].get<double>() - 0.5);
+  EXPECT_NE(r.out.find("without the 1 that jump"), std::string::npos) << r.out;
   EXPECT_TRUE(m["ate_rmse"].is_null());  // no ground truth
   EXPECT_FALSE(m["version"].get<std::string>().empty());
   EXPECT_NE(m["command_line"].get<std::string>().find("--filter seif"), std::string::npos);

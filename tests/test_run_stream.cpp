@@ -165,6 +165,29 @@ TEST(GpsRmse, IsZeroForARigidlyMovedTrajectoryAndCountsTheFixesInside) {
   EXPECT_FALSE(gpsRmse(traj, {}).has_value());
 }
 
+TEST(GpsJumps, FlagsAnIsolatedSpikeButNotAStepOrAFixAfterAGap) {
+  // A fix every 0.2 s moving at 5 m/s along x, with: a spike of 100 m at fix 10; a step of
+  // 10 m (a receiver that re-converged) from fix 20 on; a 60 s gap after fix 30, across
+  // which the track moved 300 m (5 m/s, plausible); a spike at the last fix.
+  std::vector<GpsFix> gps;
+  double t = 0.0;
+  for (int k = 0; k < 40; ++k) {
+    Vec2 p(5.0 * t, 0.0);
+    if (k == 10) p.y() += 100.0;
+    if (k >= 20) p.y() += 10.0;
+    if (k == 39) p.y() -= 50.0;
+    gps.push_back({t, p});
+    t += k == 30 ? 60.0 : 0.2;
+  }
+  const std::vector<bool> jump = gpsJumps(gps, kGpsJumpSpeed);
+  for (int k = 0; k < 40; ++k) EXPECT_EQ(jump[k], k == 10 || k == 39) << "fix " << k;
+  // Above the spike's 500 m/s nothing is a jump.
+  for (const bool j : gpsJumps(gps, 600.0)) EXPECT_FALSE(j);
+  // Too few fixes to judge.
+  EXPECT_TRUE(gpsJumps({}).empty());
+  EXPECT_EQ(gpsJumps({{0.0, Vec2(1e6, 0)}}), std::vector<bool>{false});
+}
+
 }  // namespace
 
 namespace {

@@ -90,8 +90,10 @@ void run(const RunArgs& args) {
                 metres(e.dead_reckoning_ate_unaligned).c_str(), out.final_stats.links);
   }
   if (r.info.has_gps) {
-    std::printf("  GPS (%zu fixes, aligned): trajectory RMSE %s m (median %s m) | dead reckoning %s m\n",
-                e.gps_fixes, metres(e.gps).c_str(), metres(e.gps_median).c_str(), metres(e.dead_reckoning_gps).c_str());
+    std::printf("  GPS (%zu fixes, aligned): trajectory RMSE %s m (median %s m; %s m without the %zu that jump) | "
+                "dead reckoning %s m\n",
+                e.gps_fixes, metres(e.gps).c_str(), metres(e.gps_median).c_str(),
+                metres(e.gps_without_jumps).c_str(), e.gps_jumps, metres(e.dead_reckoning_gps).c_str());
   }
   std::printf("  time: filter %.2f s | read and filter %.2f s | trajectory and map with covariances %.2f s\n",
               out.seconds, r.seconds_wall, r.seconds_outputs);

@@ -65,10 +65,12 @@ void bindRun(py::module_& m) {
       .def_readonly("gps", &RunErrors::gps)
       .def_readonly("dead_reckoning_gps", &RunErrors::dead_reckoning_gps)
       .def_readonly("gps_median", &RunErrors::gps_median)
+      .def_readonly("gps_without_jumps", &RunErrors::gps_without_jumps)
+      .def_readonly("gps_jumps", &RunErrors::gps_jumps)
       .def_readonly("gps_fixes", &RunErrors::gps_fixes)
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"ate", "dead_reckoning_ate", "landmark", "ate_unaligned", "dead_reckoning_ate_unaligned",
-                          "landmark_unaligned", "gps", "dead_reckoning_gps", "gps_median", "gps_fixes"});
+                          "landmark_unaligned", "gps", "dead_reckoning_gps", "gps_median", "gps_fixes", "gps_without_jumps", "gps_jumps"});
       });
 
   py::class_<RunRequest>(m, "RunRequest", "`seif run` as a request (eval/run_dataset.hpp).")
@@ -198,6 +200,8 @@ void bindRun(py::module_& m) {
         return py::make_tuple(rmse, compared, median);
       },
       py::arg("trajectory"), py::arg("gps"), "(rmse, fixes compared, median) after rigid alignment.");
+  m.def("gps_jumps", &gpsJumps, py::arg("gps"), py::arg("max_speed") = kGpsJumpSpeed,
+        "For each fix, whether it is a jump: the speed it implies from each neighbour exceeds max_speed [m/s].");
   m.def("evaluate_run", &evaluateRun, py::arg("filter"), py::arg("info"), py::arg("output"));
   m.def("seif_options_json", &seifOptionsJson, py::arg("options"));
 }

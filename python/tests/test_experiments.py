@@ -102,3 +102,15 @@ def test_stats_helpers():
     assert s.n == 4 and s.mean == 2.5 and s.median == 2.5
     band = seif.nees_band95(50, 2)
     assert band.lo < 2 < band.hi
+
+
+def test_gps_jumps_and_rmse():
+    # A fix every 0.2 s at 2 m/s, one 100 m off: a jump, and the RMSE without it is zero.
+    trajectory = [seif.TimedPose(0.2 * k, [0.4 * k, 0.0, 0.0]) for k in range(51)]
+    gps = [seif.GpsFix(0.2 * k, [0.4 * k, 100.0 if k == 25 else 0.0]) for k in range(51)]
+    jumps = seif.gps_jumps(gps)
+    assert [k for k, j in enumerate(jumps) if j] == [25]
+    rmse, compared, median = seif.gps_rmse(trajectory, gps)
+    assert compared == 51 and rmse > 5.0 and median < rmse / 5
+    kept = [g for g, j in zip(gps, jumps) if not j]
+    assert seif.gps_rmse(trajectory, kept)[0] < 1e-9

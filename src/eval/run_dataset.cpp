@@ -104,6 +104,8 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"dead_reckoning_gps_rmse", optionalJson(r.errors.dead_reckoning_gps)},
       {"gps_fixes", r.errors.gps_fixes},
       {"gps_median_error", optionalJson(r.errors.gps_median)},
+      {"gps_rmse_without_jumps", optionalJson(r.errors.gps_without_jumps)},
+      {"gps_jumps", r.errors.gps_jumps},
       {"errors", "*_rmse: after the best rigid 2-D alignment to the reference (ground truth or GPS, "
                  "at its stamps); *_unaligned: as estimated, in the ground truth's frame"},
       {"dropped", dropped},
@@ -165,6 +167,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
                                     {"ate_rmse", optionalJson(f.ate)},
                                     {"gps_rmse", optionalJson(f.gps)},
                                     {"gps_median_error", optionalJson(f.gps_median)},
+                                    {"gps_rmse_without_jumps", optionalJson(f.gps_without_jumps)},
                                     {"map_distance_to_batch", optionalJson(r.filter_map_distance)}};
     if (r.filter_covariance_ratio) {
       const Vec3& c = *r.filter_covariance_ratio;
@@ -206,6 +209,22 @@ std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const st
   return rmse;
 }
 
+std::vector<bool> gpsJumps(const std::vector<GpsFix>& gps, double max_speed) {
+  // The speed implied between fixes i and i + 1; a repeated stamp with a moved fix is infinite.
+  auto tooFast = [&](std::size_t i) {
+    const double dt = gps[i + 1].time - gps[i].time;
+    return (gps[i + 1].position - gps[i].position).norm() > max_speed * dt;
+  };
+  std::vector<bool> jump(gps.size(), false);
+  if (gps.size() < 2) return jump;
+  for (std::size_t i = 0; i < gps.size(); ++i) {
+    const bool before = i == 0 || tooFast(i - 1);
+    const bool after = i + 1 == gps.size() || tooFast(i);
+    jump[i] = before && after;
+  }
+  return jump;
+}
+
 RunErrors evaluateRun(const SlamFilter& filter, const DatasetInfo& info, const RunOutput& out) {
   RunErrors e;
   e.ate = ateRmse(out.trajectory, out.groundtruth, Alignment::Rigid);
@@ -216,6 +235,16 @@ RunErrors evaluateRun(const SlamFilter& filter, const DatasetInfo& info, const R
   e.landmark_unaligned = landmarkRmse(filter, info.landmarks);
   e.gps = gpsRmse(out.trajectory, out.gps, &e.gps_fixes, &e.gps_median);
   e.dead_reckoning_gps = gpsRmse(out.dead_reckoning, out.gps);
+  if (e.gps) {
+    const std::vector<bool> jump = gpsJumps(out.gps);
+    std::vector<GpsFix> kept;
+    for (std::size_t i = 0; i < out.gps.size(); ++i) {
+      if (!jump[i]) kept.push_back(out.gps[i]);
+    }
+    std::size_t compared = 0;
+    e.gps_without_jumps = gpsRmse(out.trajectory, kept, &compared);
+    e.gps_jumps = e.gps_fixes - compared;
+  }
   return e;
 }
 

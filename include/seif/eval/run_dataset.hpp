@@ -62,6 +62,9 @@ struct RunErrors {
   std::optional<double> gps, dead_reckoning_gps;                            ///< aligned
   std::optional<double> gps_median;  ///< median distance to the fixes, same alignment (robust to GPS jumps)
   std::size_t gps_fixes = 0;  ///< fixes inside the trajectory's time span (those compared)
+  /// gps, over the fixes that are not jumps (gpsJumps()): aligned and measured without them.
+  std::optional<double> gps_without_jumps;
+  std::size_t gps_jumps = 0;  ///< the jumps among the fixes compared
 };
 
 struct RunReport {
@@ -96,6 +99,17 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
 /// `compared` receives the number of fixes used.
 std::optional<double> gpsRmse(const std::vector<TimedPose>& trajectory, const std::vector<GpsFix>& gps,
                               std::size_t* compared = nullptr, std::optional<double>* median = nullptr);
+
+/// The speed above which a GPS fix counts as a jump [m/s]: three times the fastest encoder
+/// speed on Victoria Park (6.6 m/s). Its differential fixes, 0.2 s apart, imply up to 26 m/s
+/// at the 99.9th percentile of their noise, and the one jump 64 m/s.
+inline constexpr double kGpsJumpSpeed = 20.0;
+
+/// Which fixes are jumps of a failing receiver: a fix is one when the speed it implies from
+/// each neighbouring fix (distance over the time between them) exceeds `max_speed`. An
+/// isolated spike is caught; a fix with one plausible neighbour is kept; the first and last
+/// fix have one neighbour to test. Fixes must be sorted by time.
+std::vector<bool> gpsJumps(const std::vector<GpsFix>& gps, double max_speed = kGpsJumpSpeed);
 
 /// The SEIF's options as a JSON object (metrics.json "seif", `seif bench` and `seif paper`).
 std::string seifOptionsJson(const SeifOptions& options);
