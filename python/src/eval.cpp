@@ -70,7 +70,8 @@ void bindRun(py::module_& m) {
       .def_readonly("gps_fixes", &RunErrors::gps_fixes)
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"ate", "dead_reckoning_ate", "landmark", "ate_unaligned", "dead_reckoning_ate_unaligned",
-                          "landmark_unaligned", "gps", "dead_reckoning_gps", "gps_median", "gps_fixes", "gps_without_jumps", "gps_jumps"});
+                          "landmark_unaligned", "gps", "dead_reckoning_gps", "gps_median", "gps_fixes",
+                          "gps_without_jumps", "gps_jumps"});
       });
 
   py::class_<RunRequest>(m, "RunRequest", "`seif run` as a request (eval/run_dataset.hpp).")
