@@ -41,6 +41,7 @@ TEST(CliDatasets, VictoriaParkSeifBeatsDeadReckoningAgainstGps) {
   EXPECT_LT(10.0 * m["gps_rmse"].get<double>(), m["dead_reckoning_gps_rmse"].get<double>());
   // One fix jumps 141 m in 2.2 s (t = 1244.25 s); without it the RMSE is much smaller.
   EXPECT_EQ(m["gps_jumps"], 1);
+  EXPECT_EQ(m["information_scale"], 1.0);  // the paper's sparsification does not scale
   EXPECT_LT(m["gps_rmse_without_jumps"].get<double>(), m["gps_rmse"].get<double>() - 0.5);
   EXPECT_NE(r.out.find("without the 1 that jump"), std::string::npos) << r.out;
   EXPECT_TRUE(m["ate_rmse"].is_null());  // no ground truth

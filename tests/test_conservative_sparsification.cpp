@@ -171,6 +171,8 @@ TEST(InformationKnob, RhoScalesTheInformationAtEachSparsification) {
               1e-9 * seif.informationScale());
   EXPECT_EQ(plain.informationScale(), 1.0);
   EXPECT_EQ(plain.informationScalings(), 0u);
+  EXPECT_EQ(seif.stats().information_scale, seif.informationScale());  // metrics.json's
+  EXPECT_EQ(plain.stats().information_scale, 1.0);
   const Eigen::MatrixXd P = seif.information().inverse();
   const seif::Mat3 P_x = P.topLeftCorner(3, 3);
   EXPECT_LT((seif.poseCovariance() - P_x).norm(), 1e-6 * P_x.norm());

@@ -184,6 +184,8 @@ void bindConfig(py::module_& m) {
       .def_readonly("robot_links", &FilterStats::robot_links, "landmarks linked to the robot (the active set)")
       .def_readonly("max_landmark_links", &FilterStats::max_landmark_links)
       .def_readonly("blocks_touched", &FilterStats::blocks_touched, "H blocks read or written by the last step")
+      .def_readonly("information_scale", &FilterStats::information_scale,
+                    "SEIF: kappa, how many times rho / conservative sparsification scaled its information down")
       .def("as_dict",
            [](const FilterStats& s) {
              py::dict d;
@@ -192,10 +194,12 @@ void bindConfig(py::module_& m) {
              d["robot_links"] = s.robot_links;
              d["max_landmark_links"] = s.max_landmark_links;
              d["blocks_touched"] = s.blocks_touched;
+             d["information_scale"] = s.information_scale;
              return d;
            })
       .def("__repr__", [](py::handle s) {
-        return reprOf(s, {"landmarks", "links", "robot_links", "max_landmark_links", "blocks_touched"});
+        return reprOf(s, {"landmarks", "links", "robot_links", "max_landmark_links", "blocks_touched",
+                          "information_scale"});
       });
 
   py::class_<PredictedMeasurement>(m, "PredictedMeasurement",

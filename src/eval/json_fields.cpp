@@ -50,7 +50,8 @@ nlohmann::json toJson(const FilterStats& s) {
           {"links", s.links},
           {"robot_links", s.robot_links},
           {"max_landmark_links", s.max_landmark_links},
-          {"blocks_touched", s.blocks_touched}};
+          {"blocks_touched", s.blocks_touched},
+          {"information_scale", s.information_scale}};
 }
 
 }  // namespace seif

@@ -91,6 +91,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"robot_links", out.final_stats.robot_links},
       {"max_robot_links", out.max_robot_links},
       {"max_landmark_links", out.final_stats.max_landmark_links},
+      {"information_scale", out.final_stats.information_scale},
       {"max_blocks_touched", out.max_blocks_touched},
       {"rejected_observations", out.rejected_observations},
       {"outlier_gate_sigmas", std::isinf(request.outlier_gate) ? nlohmann::json(nullptr) : nlohmann::json(request.outlier_gate)},

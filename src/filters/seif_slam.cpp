@@ -560,6 +560,10 @@ std::vector<int> SeifSlam::activeLandmarks() const {
   return ids;
 }
 
-FilterStats SeifSlam::stats() const { return store_.stats(); }
+FilterStats SeifSlam::stats() const {
+  FilterStats s = store_.stats();
+  s.information_scale = information_scale_;
+  return s;
+}
 
 }  // namespace seif
