@@ -96,14 +96,12 @@ void run(const RunArgs& args) {
                 metres(e.gps_without_jumps).c_str(), e.gps_jumps, metres(e.dead_reckoning_gps).c_str());
   }
   const double kappa = out.final_stats.information_scale;
-  if (kappa != 1.0) {
-    // Above 10^6 the first steps' information, the start prior that holds the map's frame
-    // among it, weighs less than 10^-6 of the newest: on Victoria Park rho = 0.01 lost the
-    // map there (docs/consistency.md, "A fixed scale").
-    std::printf("  %sinformation scaled down %.3g times (seif:rho, sparsify=conservative)%s\n",
-                kappa > 1e6 ? "warning: " : "", kappa,
-                kappa > 1e6 ? ": the first steps, and the start prior, now weigh less than 1e-6 of the newest"
-                            : "");
+  if (kappa > kForgottenInformationScale) {
+    std::printf("  warning: information scaled down %.3g times (seif:rho, sparsify=conservative): the first "
+                "steps, and the start prior, now weigh less than 1/%.0g of the newest\n",
+                kappa, kForgottenInformationScale);
+  } else if (kappa != 1.0) {
+    std::printf("  information scaled down %.3g times (seif:rho, sparsify=conservative)\n", kappa);
   }
   std::printf("  time: filter %.2f s | read and filter %.2f s | trajectory and map with covariances %.2f s\n",
               out.seconds, r.seconds_wall, r.seconds_outputs);

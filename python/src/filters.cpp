@@ -185,7 +185,7 @@ void bindConfig(py::module_& m) {
       .def_readonly("max_landmark_links", &FilterStats::max_landmark_links)
       .def_readonly("blocks_touched", &FilterStats::blocks_touched, "H blocks read or written by the last step")
       .def_readonly("information_scale", &FilterStats::information_scale,
-                    "SEIF: kappa, how many times rho / conservative sparsification scaled its information down")
+                    "SEIF: kappa, the factor by which rho / conservative sparsification scaled its information down")
       .def("as_dict",
            [](const FilterStats& s) {
              py::dict d;

@@ -81,11 +81,16 @@ struct FilterStats {
   std::size_t robot_links = 0;         ///< landmarks linked to the robot (the active set)
   std::size_t max_landmark_links = 0;  ///< most links any landmark has (SEIF: has had)
   std::size_t blocks_touched = 0;      ///< H blocks read or written by the last step
-  /// The SEIF's kappa (SeifSlam::informationScale()): how many times SeifOptions::rho and
-  /// Sparsify::Conservative have scaled its information down, so that what the first steps
-  /// contributed, the start prior among it, weighs 1 / kappa of the newest. 1 otherwise.
+  /// The SEIF's kappa (SeifSlam::informationScale()): the factor by which SeifOptions::rho
+  /// and Sparsify::Conservative have scaled its information down, so that what the first
+  /// steps contributed, the start prior among it, weighs 1 / kappa of the newest. 1 otherwise.
   double information_scale = 1.0;
 };
+
+/// FilterStats::information_scale beyond which the first steps are as good as forgotten: on
+/// Victoria Park, rho = 0.01 lost the map once kappa passed 4e6 (docs/consistency.md, "A fixed
+/// scale"). `seif run` warns above it.
+inline constexpr double kForgottenInformationScale = 1e6;
 
 /// How a marginal is computed (SlamFilter::marginal).
 enum class MarginalMode {
