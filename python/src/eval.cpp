@@ -11,6 +11,9 @@
 #include <seif/eval/run_dataset.hpp>
 #include <seif/eval/stats.hpp>
 
+#include <limits>
+#include <optional>
+
 namespace seif::python {
 namespace {
 
@@ -221,7 +224,26 @@ void bindStats(py::module_& m) {
       .def_readonly("lo", &Band::lo)
       .def_readonly("hi", &Band::hi)
       .def("__repr__", [](py::handle s) { return reprOf(s, {"lo", "hi"}); });
+  py::class_<PairedRatio>(m, "PairedRatio", "mean(x) / mean(y) over paired runs and its 95 % half-width.")
+      .def_readonly("ratio", &PairedRatio::ratio)
+      .def_readonly("ci95", &PairedRatio::ci95, "half-width of the 95 % interval (delta method)")
+      .def_readonly("pairs", &PairedRatio::pairs, "pairs where both values are finite")
+      .def("__repr__", [](py::handle s) { return reprOf(s, {"ratio", "ci95", "pairs"}); });
   m.def("summarize", [](const std::vector<double>& xs) { return summarize(xs); }, py::arg("xs"));
+  m.def(
+      "paired_ratio",
+      [](const std::vector<std::optional<double>>& x, const std::vector<std::optional<double>>& y) {
+        auto values = [](const std::vector<std::optional<double>>& v) {  // None (JSON null): a stopped run
+          std::vector<double> out;
+          for (const auto& e : v) out.push_back(e.value_or(std::numeric_limits<double>::quiet_NaN()));
+          return out;
+        };
+        return pairedRatio(values(x), values(y));
+      },
+      py::arg("x"), py::arg("y"),
+      "mean(x) / mean(y) over the pairs where both are finite (None and NaN: a stopped run), with the "
+      "half-width of its 95 % interval (delta method over the residuals x_i - R y_i), e.g. two filters' "
+      "mse_runs of one study or of nees.json.");
   m.def("ci95_half_width", [](const std::vector<double>& xs) { return ci95HalfWidth(xs); }, py::arg("xs"));
   m.def("student_t_quantile", &studentTQuantile, py::arg("p"), py::arg("dof"));
   m.def("chi_square_quantile", &chiSquareQuantile, py::arg("p"), py::arg("dof"));
@@ -432,6 +454,8 @@ void bindConsistency(py::module_& m) {
       .def_readonly("error_aligned_final", &ConsistencyFilterResult::error_aligned_final)
       .def_readonly("mse_final", &ConsistencyFilterResult::mse_final)
       .def_readonly("mse_aligned_final", &ConsistencyFilterResult::mse_aligned_final)
+      .def_readonly("mse_runs", &ConsistencyFilterResult::mse_runs, "mean squared landmark error of each run (NaN: stopped)")
+      .def_readonly("mse_aligned_runs", &ConsistencyFilterResult::mse_aligned_runs)
       .def_readonly("seconds", &ConsistencyFilterResult::seconds)
       .def_readonly("failed_runs", &ConsistencyFilterResult::failed_runs,
                     "runs it stopped in (a numerical failure), left out of its figures");

@@ -68,6 +68,11 @@ def test_consistency_runs_on_threads_with_a_progress_callback():
     report = json.loads(seif.consistency_json(result, options))
     assert report["runs"] == 3
     assert "ekf" in seif.consistency_table(result)
+    # Per-run errors, paired across filters: the ratio of their means.
+    ekf, sf = result.filters
+    assert len(ekf.mse_runs) == 3 and abs(sum(ekf.mse_runs) / 3 - ekf.mse_final) < 1e-15
+    r = seif.paired_ratio(sf.mse_runs, ekf.mse_runs)
+    assert r.pairs == 3 and abs(r.ratio - sf.mse_final / ekf.mse_final) < 1e-12 and r.ci95 > 0
     options.posterior_mean = True
     result = seif.run_consistency(options)
     assert [(f.name, f.spec, f.posterior_mean) for f in result.filters] == [
@@ -102,6 +107,11 @@ def test_stats_helpers():
     assert s.n == 4 and s.mean == 2.5 and s.median == 2.5
     band = seif.nees_band95(50, 2)
     assert band.lo < 2 < band.hi
+    # x = 2 y exactly: ratio 2, no spread; a NaN pair is left out.
+    r = seif.paired_ratio([2.0, 4.0, float("nan"), 1.0], [1.0, 2.0, 3.0, None])
+    assert r.ratio == 2.0 and r.ci95 == 0.0 and r.pairs == 2
+    with pytest.raises(seif.InvalidArgument):
+        seif.paired_ratio([1.0], [1.0, 2.0])
 
 
 def test_gps_jumps_and_rmse():

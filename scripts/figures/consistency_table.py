@@ -4,7 +4,8 @@
 Usage: consistency_table.py WORLD=OUT/nees.json [WORLD=OUT/nees.json ...]
 
 Each cell: pose / landmark NEES (after the last step), then the mean squared landmark error
-as a multiple of the batch MAP's, unaligned / aligned (when the world's run has the batch).
+as a multiple of the batch MAP's over the paired runs, ± the half-width of its 95 % interval,
+unaligned / aligned (when the world's run has the batch).
 A filter missing from a world's run is left blank; failed runs are counted in the cell.
 """
 import json
@@ -23,6 +24,16 @@ def fmt(x):
     return f"{x:.2f}"
 
 
+def ratio(f, key):
+    """The MSE ratio to the batch over the paired runs, ± its 95 % half-width."""
+    r = f[key]
+    if r is None or r["ratio"] is None:
+        return "–"
+    if f["name"] == "batch" or r["ci95"] is None or r["pairs"] < 2:
+        return fmt(r["ratio"])
+    return f"{fmt(r['ratio'])} ± {fmt(r['ci95'])}"
+
+
 def row_name(f):
     return f["name"] + (" [posterior mean]" if f.get("estimate") == "posterior" else "")
 
@@ -35,7 +46,7 @@ def cells(path):
     for f in filters:
         text = f"{fmt(f['pose_nees_final'])} / {fmt(f['landmark_nees_final'])}"
         if batch is not None:
-            text += f", {fmt(f['mse_final'] / batch['mse_final'])} / {fmt(f['mse_aligned_final'] / batch['mse_aligned_final'])}"
+            text += f", {ratio(f, 'mse_ratio_to_batch')} / {ratio(f, 'mse_aligned_ratio_to_batch')}"
         else:
             text += f", aligned {f['error_aligned_final']:.3f} m"
         if f.get("failed_runs"):

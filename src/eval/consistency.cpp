@@ -318,6 +318,8 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     }
     fr.mse_final = finiteMean(mse);
     fr.mse_aligned_final = finiteMean(mse_aligned);
+    fr.mse_runs = mse;
+    fr.mse_aligned_runs = mse_aligned;
     fr.error_final = finiteMean(rmse);
     fr.error_aligned_final = finiteMean(rmse_aligned);
     result.filters.push_back(std::move(fr));
@@ -340,7 +342,31 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
   return result;
 }
 
+const ConsistencyFilterResult* batchReference(const ConsistencyResult& result) {
+  for (const ConsistencyFilterResult& f : result.filters) {
+    if (f.name == "batch" || f.name.rfind("batch:", 0) == 0) return &f;
+  }
+  return nullptr;
+}
+
+namespace {
+
+nlohmann::json finiteArray(const std::vector<double>& xs) {
+  nlohmann::json a = nlohmann::json::array();
+  for (double x : xs) a.push_back(finiteOrNull(x));
+  return a;
+}
+
+nlohmann::json ratioJson(const std::vector<double>& x, const std::vector<double>* y) {
+  if (!y) return nullptr;
+  const PairedRatio r = pairedRatio(x, *y);
+  return {{"ratio", finiteOrNull(r.ratio)}, {"ci95", finiteOrNull(r.ci95)}, {"pairs", r.pairs}};
+}
+
+}  // namespace
+
 std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOptions& options) {
+  const ConsistencyFilterResult* reference = batchReference(result);
   nlohmann::json filters = nlohmann::json::array();
   for (std::size_t i = 0; i < result.filters.size(); ++i) {
     const ConsistencyFilterResult& f = result.filters[i];
@@ -368,6 +394,11 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
                        {"error_aligned_final", finiteOrNull(f.error_aligned_final)},
                        {"mse_final", finiteOrNull(f.mse_final)},
                        {"mse_aligned_final", finiteOrNull(f.mse_aligned_final)},
+                       {"mse_runs", finiteArray(f.mse_runs)},
+                       {"mse_aligned_runs", finiteArray(f.mse_aligned_runs)},
+                       {"mse_ratio_to_batch", ratioJson(f.mse_runs, reference ? &reference->mse_runs : nullptr)},
+                       {"mse_aligned_ratio_to_batch",
+                        ratioJson(f.mse_aligned_runs, reference ? &reference->mse_aligned_runs : nullptr)},
                        {"seconds", f.seconds},
                        {"nees", series},
                        {"failed_runs", failures}});
@@ -410,13 +441,7 @@ std::string consistencyCsv(const ConsistencyResult& r) {
 }
 
 std::string consistencyTable(const ConsistencyResult& result) {
-  const ConsistencyFilterResult* reference = nullptr;
-  for (const ConsistencyFilterResult& f : result.filters) {
-    if (f.name == "batch" || f.name.rfind("batch:", 0) == 0) {
-      reference = &f;
-      break;
-    }
-  }
+  const ConsistencyFilterResult* reference = batchReference(result);
   std::ostringstream t;
   t << std::fixed;
   t << "| filter | pose NEES | landmark NEES | rel. pose NEES | rel. landmark NEES | landmark RMSE [m] | aligned [m] |";
@@ -436,8 +461,13 @@ std::string consistencyTable(const ConsistencyResult& result) {
       << cell(f.nees_final.pose_relative, 2) << " | " << cell(f.nees_final.landmark_relative, 2) << " | "
       << cell(f.error_final, 4) << " | " << cell(f.error_aligned_final, 4) << " |";
     if (reference) {
-      t << " " << cell(f.mse_final / reference->mse_final, 2) << " | "
-        << cell(f.mse_aligned_final / reference->mse_aligned_final, 2) << " |";
+      // The ratio of the means over the runs both completed, and its 95 % half-width.
+      auto ratio = [&](const std::vector<double>& x, const std::vector<double>& y) {
+        const PairedRatio r = pairedRatio(x, y);
+        return cell(r.ratio, 2) + (r.pairs >= 2 && std::isfinite(r.ratio) ? " ± " + cell(r.ci95, 2) : "");
+      };
+      t << " " << ratio(f.mse_runs, reference->mse_runs) << " | "
+        << ratio(f.mse_aligned_runs, reference->mse_aligned_runs) << " |";
     }
     t << "\n";
   }
@@ -445,6 +475,10 @@ std::string consistencyTable(const ConsistencyResult& result) {
     << result.runs << " runs: pose [" << cell(result.pose_band.lo, 2) << ", " << cell(result.pose_band.hi, 2)
     << "] (3 dof), landmark [" << cell(result.landmark_band.lo, 2) << ", " << cell(result.landmark_band.hi, 2)
     << "] (2 dof, each landmark's NEES averaged over the map first).\n";
+  if (reference) {
+    t << "MSE / batch: the ratio of the mean squared landmark errors over the runs both completed, ± the half-width "
+         "of its 95 % interval (delta method over the paired runs).\n";
+  }
   for (const ConsistencyFilterResult& f : result.filters) {
     if (f.failed_runs.empty() || f.posterior_mean) continue;
     t << "\n" << f.name << " stopped in " << f.failed_runs.size() << " of " << result.runs << " runs"

@@ -222,15 +222,12 @@ PaperFilterSummary summarizePaperFilter(std::size_t f, const std::vector<PaperRu
   s.pose = summarize(s.pose_error);
   s.nees = summarize(s.landmark_nees);
   s.nees_pose = summarize(s.pose_nees);
-  std::vector<double> ekf_mse, residual, ratios;
+  std::vector<double> ekf_mse, ratios;
   for (const PaperRun& run : runs) ekf_mse.push_back(run.filters[0].mse);
-  const double ekf_mean = sampleMean(ekf_mse);
-  s.ratio = s.error.mean / ekf_mean;
-  for (std::size_t r = 0; r < runs.size(); ++r) {
-    residual.push_back(s.mse[r] - s.ratio * ekf_mse[r]);
-    ratios.push_back(s.mse[r] / ekf_mse[r]);
-  }
-  s.ratio_ci95 = ci95HalfWidth(residual) / ekf_mean;
+  const PairedRatio to_ekf = pairedRatio(s.mse, ekf_mse);
+  s.ratio = to_ekf.ratio;
+  s.ratio_ci95 = to_ekf.ci95;
+  for (std::size_t r = 0; r < runs.size(); ++r) ratios.push_back(s.mse[r] / ekf_mse[r]);
   s.ratio_median = median(std::move(ratios));
   std::vector<double> ekf_aligned;
   for (const PaperRun& run : runs) ekf_aligned.push_back(run.filters[0].aligned_mse);

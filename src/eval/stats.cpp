@@ -182,6 +182,32 @@ double ci95HalfWidth(std::span<const double> xs) {
   return studentTQuantile(0.975, n - 1.0) * sampleStdDev(xs) / std::sqrt(n);
 }
 
+PairedRatio pairedRatio(std::span<const double> x, std::span<const double> y) {
+  if (x.size() != y.size()) {
+    throw InvalidArgument("pairedRatio: samples of " + std::to_string(x.size()) + " and " +
+                          std::to_string(y.size()) + " values are not paired");
+  }
+  std::vector<double> xs, ys;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (std::isfinite(x[i]) && std::isfinite(y[i])) {
+      xs.push_back(x[i]);
+      ys.push_back(y[i]);
+    }
+  }
+  PairedRatio r;
+  r.pairs = xs.size();
+  if (xs.empty()) {
+    r.ratio = std::numeric_limits<double>::quiet_NaN();
+    return r;
+  }
+  const double y_mean = sampleMean(ys);
+  r.ratio = sampleMean(xs) / y_mean;
+  std::vector<double> residual(xs.size());
+  for (std::size_t i = 0; i < xs.size(); ++i) residual[i] = xs[i] - r.ratio * ys[i];
+  r.ci95 = ci95HalfWidth(residual) / std::abs(y_mean);
+  return r;
+}
+
 Summary summarize(std::span<const double> xs) {
   Summary s;
   s.n = xs.size();

@@ -88,6 +88,9 @@ struct ConsistencyFilterResult {
   double error_aligned_final = 0.0;  ///< the same after rigid alignment to the truth
   double mse_final = 0.0;            ///< mean squared landmark error [m^2], mean over runs
   double mse_aligned_final = 0.0;
+  /// mse and mse_aligned of each run (NaN where it stopped): paired with another filter's
+  /// of the same runs by pairedRatio() (eval/stats.hpp), as the table's ratios to the batch.
+  std::vector<double> mse_runs, mse_aligned_runs;
   double seconds = 0.0;              ///< filter time, summed over runs (finish() included)
   /// The runs it stopped in. Their figures are left out of every mean above (NaN in
   /// landmark_nees_runs); the other filters' figures of those runs are kept.
@@ -119,8 +122,10 @@ NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const st
 /// nees.json: {"runs", "steps", "band95": {"pose": [lo, hi], "landmark": [lo, hi]},
 /// "sample_steps", "filters": [{"name", "filter_spec", "estimate" ("own" | "posterior_mean"), "pose_nees_final", "landmark_nees_final",
 /// "pose_nees_relative_final", "landmark_nees_relative_final", "error_final",
-/// "error_aligned_final", "mse_final", "mse_aligned_final", "seconds", "nees": {"pose":
-/// [...], "landmark": [...], "pose_relative": [...], "landmark_relative": [...]},
+/// "error_aligned_final", "mse_final", "mse_aligned_final", "mse_runs", "mse_aligned_runs",
+/// "mse_ratio_to_batch" and "mse_aligned_ratio_to_batch" ({"ratio", "ci95", "pairs"}, null
+/// without a batch row: consistencyTable's reference), "seconds", "nees": {"pose": [...],
+/// "landmark": [...], "pose_relative": [...], "landmark_relative": [...]},
 /// "failed_runs": [{"run", "error"}]}]}.
 /// NaN is written as null.
 std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOptions& options);
@@ -135,7 +140,12 @@ void writeConsistencyResults(const ConsistencyResult& result, const ConsistencyO
 
 /// The console / README table: one row per filter with final NEES (global, relative),
 /// errors, and their mean squared error as a multiple of the first smoother's ("batch")
-/// when one ran.
+/// when one ran, with the half-width of its 95 % interval over the paired runs
+/// (pairedRatio()).
 std::string consistencyTable(const ConsistencyResult& result);
+
+/// The first smoother's row ("batch", "batch:..."), the reference of the ratios; nullptr
+/// when none ran.
+const ConsistencyFilterResult* batchReference(const ConsistencyResult& result);
 
 }  // namespace seif

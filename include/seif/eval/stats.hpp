@@ -1,6 +1,7 @@
 #pragma once
 // Small-sample statistics for Monte-Carlo experiments (`seif paper`): sample mean, sample
-// standard deviation, the Student-t quantile and the 95 % confidence interval of a mean.
+// standard deviation, the Student-t quantile and the 95 % confidence interval of a mean or
+// of a ratio of paired means.
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -55,6 +56,20 @@ Band neesBand95(std::size_t samples, int dof);
 /// Half-width of the two-sided 95 % confidence interval of the mean of an i.i.d. sample:
 /// t_{0.975, n-1} * s / sqrt(n), s = sampleStdDev(). 0 for n < 2 (no interval: undefined).
 double ci95HalfWidth(std::span<const double> xs);
+
+/// The ratio of the means of two paired samples (x_i and y_i from the same run), R =
+/// mean(x) / mean(y) over the pairs where both are finite, and the half-width of its 95 %
+/// confidence interval by the delta method: with the residuals d_i = x_i - R y_i,
+/// t_{0.975, n-1} sd(d) / (sqrt(n) mean(y)) (the paper's "error ratio to the EKF"; a ratio
+/// of means, not a mean of per-run ratios, which a few runs near zero would dominate).
+/// Half-width 0 for fewer than two pairs; ratio NaN for none. InvalidArgument when the
+/// samples differ in length.
+struct PairedRatio {
+  double ratio = 0.0;
+  double ci95 = 0.0;
+  std::size_t pairs = 0;  ///< pairs where both values are finite
+};
+PairedRatio pairedRatio(std::span<const double> x, std::span<const double> y);
 
 /// Everything the tables print about one sample.
 struct Summary {
