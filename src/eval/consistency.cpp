@@ -461,10 +461,12 @@ std::string consistencyTable(const ConsistencyResult& result) {
       << cell(f.nees_final.pose_relative, 2) << " | " << cell(f.nees_final.landmark_relative, 2) << " | "
       << cell(f.error_final, 4) << " | " << cell(f.error_aligned_final, 4) << " |";
     if (reference) {
-      // The ratio of the means over the runs both completed, and its 95 % half-width.
+      // The ratio of the means over the runs both completed, and its 95 % half-width (none
+      // on the reference's own row).
       auto ratio = [&](const std::vector<double>& x, const std::vector<double>& y) {
         const PairedRatio r = pairedRatio(x, y);
-        return cell(r.ratio, 2) + (r.pairs >= 2 && std::isfinite(r.ratio) ? " ± " + cell(r.ci95, 2) : "");
+        const bool interval = &f != reference && r.pairs >= 2 && std::isfinite(r.ratio);
+        return cell(r.ratio, 2) + (interval ? " ± " + cell(r.ci95, 2) : "");
       };
       t << " " << ratio(f.mse_runs, reference->mse_runs) << " | "
         << ratio(f.mse_aligned_runs, reference->mse_aligned_runs) << " |";

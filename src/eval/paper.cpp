@@ -231,7 +231,7 @@ PaperFilterSummary summarizePaperFilter(std::size_t f, const std::vector<PaperRu
   s.ratio_median = median(std::move(ratios));
   std::vector<double> ekf_aligned;
   for (const PaperRun& run : runs) ekf_aligned.push_back(run.filters[0].aligned_mse);
-  s.aligned_ratio = s.aligned_error.mean / sampleMean(ekf_aligned);
+  s.aligned_ratio = pairedRatio(s.aligned_mse, ekf_aligned).ratio;
   s.us_mean = sampleMean(us);
   s.us_median = median(std::move(us));
   return s;
