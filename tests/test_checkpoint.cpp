@@ -371,7 +371,7 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
     for (const auto& [file, spec] : {std::pair{"ekf.ckpt", "ekf:linearization=fej"}, std::pair{"eif.ckpt", "eif"},
                                      std::pair{"seif.ckpt", "seif:active=3,relax-order=random"},
                                      std::pair{"eseif.ckpt", "seif:sparsify=eseif,active=3"},
-                                     std::pair{"seif-coarse.ckpt", "seif:profile=consistent,active=3"}}) {
+                                     std::pair{"seif-coarse.ckpt", "seif:profile=consistent,active=3,stale=5"}}) {
       std::unique_ptr<SlamFilter> f = makeFilter(spec, s.start, test::configFor(s));
       for (const Step& step : s.steps) f->step(step.u, step.observations);
       f->save(root / "corpus" / "fuzz_checkpoint" / file, CheckpointExtras{12, {{"spec", spec}}});
@@ -417,7 +417,7 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   // Version 8 kept each active landmark's coarse row with its robot term; it loads with the
   // term taken out of the rows and the sums, which then hold V^T (b - H mu) and V^T H V with
   // the robot's terms added fresh, as a version-9 file's do.
-  for (const char* file : {"seif-coarse-v8.ckpt", "seif-coarse-v9.ckpt", "seif-coarse.ckpt"}) {
+  for (const char* file : {"seif-coarse-v8.ckpt", "seif-coarse-v9.ckpt", "seif-coarse-v10.ckpt", "seif-coarse.ckpt"}) {
     const auto f = load(root / "corpus" / "fuzz_checkpoint" / file);
     const SeifStore& store = dynamic_cast<const SeifSlam&>(*f).store();
     ASSERT_TRUE(store.coarse()) << file;
@@ -430,6 +430,13 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   }
   // Version 10 added whether the next update may skip the robot-active block's solve: a
   // version-9 file (seif-coarse-v9.ckpt, above) loads without it, and the block is solved again.
+  // Version 11 added SeifOptions::stale: older files load with it off.
+  for (const char* file : {"seif-coarse-v9.ckpt", "seif-coarse-v10.ckpt"}) {
+    const auto f = load(root / "corpus" / "fuzz_checkpoint" / file);
+    EXPECT_EQ(dynamic_cast<const SeifSlam&>(*f).options().stale, 0) << file;
+  }
+  const auto stale = load(root / "corpus" / "fuzz_checkpoint" / "seif-coarse.ckpt");
+  EXPECT_EQ(dynamic_cast<const SeifSlam&>(*stale).options().stale, 5);
 }
 #endif
 

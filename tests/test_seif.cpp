@@ -16,7 +16,10 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <map>
+#include <set>
 #include <random>
 
 namespace {
@@ -489,4 +492,59 @@ TEST(Seif, AStepThatFailsNumericallyLeavesTheFilterAsItWas) {
     EXPECT_EQ(seif->information(), twin->information()) << spec;
     EXPECT_EQ(seif->stats().links, twin->stats().links) << spec;
   }
+}
+
+namespace {
+
+// Steps at which a landmark observed within the last `threshold` steps left the active set
+// while one unobserved for longer stayed in it (the ages of the landmarks linked before the
+// step, and of those observed in it, against the links after it).
+int staleKeptOverFresh(const test::Scenario& s, long stale, long threshold, int active = 4) {
+  SeifOptions o;
+  o.active = active;
+  o.stale = stale;
+  SeifSlam f(s.start, configFor(s), o);
+  int steps = 0;
+  for (const Step& step : s.steps) {
+    std::map<int, long> seen;  // slot -> last observed
+    for (const SeifStore::RobotLink& l : f.store().robotLinks()) seen[l.slot] = l.last_seen;
+    f.step(step.u, step.observations);
+    const long now = f.store().step();
+    const std::vector<int>& ids = f.store().ids();
+    for (const Observation& z : step.observations) {
+      const auto it = std::find(ids.begin(), ids.end(), z.landmark);
+      if (it != ids.end()) seen[static_cast<int>(it - ids.begin())] = now;
+    }
+    std::set<int> kept;
+    for (const SeifStore::RobotLink& l : f.store().robotLinks()) kept.insert(l.slot);
+    bool fresh_left = false, stale_kept = false;
+    for (const auto& [slot, last] : seen) {
+      const bool is_stale = now - last > threshold;
+      if (kept.count(slot) > 0) stale_kept = stale_kept || is_stale;
+      else fresh_left = fresh_left || !is_stale;
+    }
+    steps += fresh_left && stale_kept ? 1 : 0;
+  }
+  return steps;
+}
+
+}  // namespace
+
+TEST(Sparsification, StaleLandmarksAreDeactivatedFirst) {
+  // SeifOptions::stale: the surplus comes first from the landmarks unobserved for longer
+  // than `stale` steps. The weakest-link rule alone keeps such landmarks while it lets
+  // fresher ones go, on the same data (so the check below can fail).
+  constexpr long kStale = 5;
+  constexpr int kActive = 8;
+  int weakest = 0;
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    const test::Scenario s = test::makeScenario(seed, 60, 600);
+    weakest += staleKeptOverFresh(s, 0, kStale, kActive);
+    EXPECT_EQ(staleKeptOverFresh(s, kStale, kStale, kActive), 0) << "seed " << seed;
+  }
+  EXPECT_GT(weakest, 10);  // 43 steps measured
+  SeifOptions bad;
+  bad.stale = -1;
+  const test::Scenario s = test::makeScenario(1, 10, 10);
+  EXPECT_THROW(SeifSlam(s.start, configFor(s), bad), InvalidArgument);
 }

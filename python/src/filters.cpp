@@ -90,11 +90,14 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("gauge", &SeifOptions::gauge,
                      "paper (eq. 44-51 as published) or kept: the sparsification claims no information on the "
                      "directions the posterior leaves free")
+      .def_readwrite("stale", &SeifOptions::stale,
+                     "deactivate first the active landmarks not observed in the last `stale` steps, the "
+                     "longest unobserved first (0: off)")
       .def_readwrite("coarse", &SeifOptions::coarse,
                      "off or rigid: the amortised mean also corrects the map's rigid motion each step (O(1))")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho", "gauge", "coarse"});
+                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho", "gauge", "coarse", "stale"});
       });
 }
 

@@ -82,6 +82,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.f64(o.rho);
   out.u64(static_cast<std::uint64_t>(o.gauge));
   out.u64(static_cast<std::uint64_t>(o.coarse));
+  out.i64(o.stale);
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -112,6 +113,7 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   }
   if (in.version() >= 7) o.gauge = static_cast<SeifOptions::Gauge>(in.u64Max("gauge", 1));
   if (in.version() >= 8) o.coarse = static_cast<SeifOptions::Coarse>(in.u64Max("coarse", 1));
+  if (in.version() >= 11) o.stale = in.i64In("stale", 0, std::numeric_limits<std::int64_t>::max());  // earlier: off
   return o;
 }
 

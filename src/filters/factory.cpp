@@ -43,7 +43,7 @@ void applyProfile(FilterSpec& s, std::string_view v);
 const std::string kProfileHelp = "a recommended configuration: consistent = " + std::string(kConsistentProfile) +
                                  " (honest covariances in constant time; README)";
 
-const std::array<FilterOption, 22> kOptions = {{
+const std::array<FilterOption, 23> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0, kProfileHelp,
      &applyProfile, [](const FilterSpec&) { return std::string(); }},
     {"linearization", kAll, kChoice, "standard|fej|invariant|oc", 0, 0,
@@ -85,6 +85,11 @@ const std::array<FilterOption, 22> kOptions = {{
      "which landmarks the sparsification deactivates: the weakest-linked or the oldest-seen",
      [](FilterSpec& s, std::string_view v) { s.seif.deactivate = SeifOptions::parseDeactivate(v); },
      [](const FilterSpec& s) { return std::string(optionName(s.seif.deactivate)); }},
+    {"stale", kSeif, kInteger, "", 0, kIntMax,
+     "deactivate first the active landmarks not observed in the last N steps, the longest unobserved "
+     "first (0: off)",
+     [](FilterSpec& s, std::string_view v) { s.seif.stale = parseInteger("stale", v, 0, kIntMax); },
+     [](const FilterSpec& s) { return std::to_string(s.seif.stale); }},
     {"recovery", kSeif, kChoice, "after-update|before-update", 0, 0,
      "relax the amortized mean before the measurement update (the book's order) or after it",
      [](FilterSpec& s, std::string_view v) { s.seif.recovery = SeifOptions::parseRecovery(v); },

@@ -26,6 +26,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
                                 std::to_string(kMaxLocalLandmarks - 1));
   }
   if (options.relax < 0) throw InvalidArgument("seif: --relax must be >= 0");
+  if (options.stale < 0) throw InvalidArgument("seif: stale must be >= 0");
   if (options.beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
   if (!(options.reanchor >= 0.0) || !std::isfinite(options.reanchor)) {
     throw InvalidArgument("seif: reanchor must be finite and >= 0");

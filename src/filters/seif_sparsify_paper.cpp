@@ -31,9 +31,13 @@ void SeifSlam::deactivateSurplus(bool solve_active_mean_first, int slot, bool bl
       const Vec2 dl = store_.node(l.slot).H.diagonal().cwiseSqrt().cwiseInverse();
       score = (dx.asDiagonal() * l.H * dl.asDiagonal()).norm();
     }
+    // SeifOptions::stale: the landmarks unobserved for longer go first, the stalest first
+    // (negative scores sort before every link strength and step count).
+    const long unobserved = store_.step() - l.last_seen;
+    if (slot < 0 && options_.stale > 0 && unobserved > options_.stale) score = -static_cast<double>(unobserved);
     ranking_.emplace_back(score, l.slot);
   }
-  std::sort(ranking_.begin(), ranking_.end());  // weakest (or oldest) first
+  std::sort(ranking_.begin(), ranking_.end());  // stale, then weakest (or oldest) first
   order_.clear();
   for (int i = drop; i < k; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y+
   for (int i = 0; i < drop; ++i) order_.push_back(ranking_[static_cast<std::size_t>(i)].second);  // Y0

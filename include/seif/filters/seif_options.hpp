@@ -26,6 +26,12 @@ struct SeifOptions {
   /// Weakest: deactivate the landmarks with the weakest normalised link to the robot (the
   /// paper). Oldest: those observed least recently.
   Deactivate deactivate = Deactivate::Weakest;
+  /// Stale first: a surplus is taken first from the active landmarks not observed in the last
+  /// `stale` steps, the longest unobserved first; `deactivate` orders the rest. 0: off. The
+  /// weakest-link rule can keep a landmark active long after it was last seen and then
+  /// condition the robot on it during a loop closure (docs/consistency.md, "Victoria Park:
+  /// where the profile's map goes wrong": 400 steps, 9 s there).
+  long stale = 0;
   /// When the amortised mean is relaxed within update(): BeforeMeasurement (default) is the
   /// book's order (Probabilistic Robotics Table 12.1): the measurement update linearises at
   /// a freshly relaxed mean. AfterMeasurement lets the sparsification and the next motion
