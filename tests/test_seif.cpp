@@ -19,8 +19,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
-#include <set>
 #include <random>
+#include <set>
 
 namespace {
 
@@ -499,7 +499,7 @@ namespace {
 // Steps at which a landmark observed within the last `threshold` steps left the active set
 // while one unobserved for longer stayed in it (the ages of the landmarks linked before the
 // step, and of those observed in it, against the links after it).
-int staleKeptOverFresh(const test::Scenario& s, long stale, long threshold, int active = 4) {
+int staleKeptOverFresh(const test::Scenario& s, long stale, long threshold, int active) {
   SeifOptions o;
   o.active = active;
   o.stale = stale;

@@ -113,7 +113,7 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   }
   if (in.version() >= 7) o.gauge = static_cast<SeifOptions::Gauge>(in.u64Max("gauge", 1));
   if (in.version() >= 8) o.coarse = static_cast<SeifOptions::Coarse>(in.u64Max("coarse", 1));
-  if (in.version() >= 11) o.stale = in.i64In("stale", 0, std::numeric_limits<std::int64_t>::max());  // earlier: off
+  if (in.version() >= 11) o.stale = in.i64In("stale", 0, kIntMax);  // earlier files: off (the spec's range)
   return o;
 }
 
