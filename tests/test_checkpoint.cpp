@@ -417,7 +417,8 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   // Version 8 kept each active landmark's coarse row with its robot term; it loads with the
   // term taken out of the rows and the sums, which then hold V^T (b - H mu) and V^T H V with
   // the robot's terms added fresh, as a version-9 file's do.
-  for (const char* file : {"seif-coarse-v8.ckpt", "seif-coarse-v9.ckpt", "seif-coarse-v10.ckpt", "seif-coarse.ckpt"}) {
+  for (const char* file :
+       {"seif-coarse-v8.ckpt", "seif-coarse-v9.ckpt", "seif-coarse-v10.ckpt", "seif-coarse-v11.ckpt", "seif-coarse.ckpt"}) {
     const auto f = load(root / "corpus" / "fuzz_checkpoint" / file);
     const SeifStore& store = dynamic_cast<const SeifSlam&>(*f).store();
     ASSERT_TRUE(store.coarse()) << file;
@@ -437,6 +438,12 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   }
   const auto stale = load(root / "corpus" / "fuzz_checkpoint" / "seif-coarse.ckpt");
   EXPECT_EQ(dynamic_cast<const SeifSlam&>(*stale).options().stale, 5);
+  // Version 12 added SeifOptions::omega: older files relax by eq. (42) as published (1), even
+  // the profile's (seif-coarse-v11.ckpt), whose current files keep its over-relaxation.
+  for (const char* file : {"seif-coarse-v10.ckpt", "seif-coarse-v11.ckpt"}) {
+    EXPECT_EQ(dynamic_cast<const SeifSlam&>(*load(root / "corpus" / "fuzz_checkpoint" / file)).options().omega, 1.0) << file;
+  }
+  EXPECT_EQ(dynamic_cast<const SeifSlam&>(*stale).options().omega, 1.95);
 }
 #endif
 

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <charconv>
 #include <random>
 #include <string>
 #include <vector>
@@ -35,6 +36,15 @@ std::vector<std::string> valuesOf(const FilterOption& o) {
     case FilterOption::Kind::Seed: out = {"0", "18446744073709551615", "12345"}; break;
     case FilterOption::Kind::Length: out = {"0", "0.005", "2.5"}; break;
     case FilterOption::Kind::Fraction: out = {"0", "0.01", "0.5"}; break;
+    case FilterOption::Kind::Real: {  // inside the open interval (min, max)
+      const double lo = static_cast<double>(o.min), span = static_cast<double>(o.max - o.min);
+      for (double t : {0.001, 0.5, 0.975}) {
+        char buf[32];
+        const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, lo + t * span);  // shortest round trip
+        out.emplace_back(buf, end);
+      }
+      break;
+    }
     case FilterOption::Kind::Profile: out = {"consistent"}; break;
   }
   return out;

@@ -75,7 +75,8 @@ TEST_P(CoarseLevel, KeptSumsSurviveRemovalAndMerge) {
 TEST_P(CoarseLevel, RelaxingALandmarkSolvesItsRowOfTheWholeMap) {
   // relaxLandmark() reads the neighbours' stored means and takes the frame offset from the
   // kept row w_i (a clean row) or adds it link by link (a row out of the sums): eq. (42),
-  // mu_i = H_ii^-1 (b_i - sum_{j != i} H_ij mu_j), against the whole map's H, b and mean.
+  // mu_i = H_ii^-1 (b_i - sum_{j != i} H_ij mu_j), against the whole map's H, b and mean;
+  // over-relaxed, mu_i + omega (that - mu_i).
   const auto [data, config] = paperWorld(PaperPath::Lissajous, 3, 200);
   auto f = makeFilter(GetParam(), startPose(data), config);
   for (const auto& step : data.steps) f->step(step.u, step.observations);
@@ -92,9 +93,15 @@ TEST_P(CoarseLevel, RelaxingALandmarkSolvesItsRowOfTheWholeMap) {
     const Vec2 rhs = b.segment<2>(r) - Eigen::MatrixXd(H.middleRows(r, 2)) * mu + H_ii * mu.segment<2>(r);
     const Vec2 expected = H_ii.llt().solve(rhs);
     SeifStore copy = store;
-    copy.relaxLandmark(slot);
+    copy.relaxLandmark(slot, 1.0);
     EXPECT_LT((copy.mean(slot) - expected).norm(), 1e-9 * (1.0 + expected.norm()))
         << GetParam() << ", landmark slot " << slot << ": " << copy.mean(slot).transpose() << " vs " << expected.transpose();
+    // Over-relaxed (SeifOptions::omega): omega times the same step from the current mean.
+    const Vec2 current = mu.segment<2>(r);
+    const Vec2 over = current + 1.9 * (expected - current);
+    SeifStore over_copy = store;
+    over_copy.relaxLandmark(slot, 1.9);
+    EXPECT_LT((over_copy.mean(slot) - over).norm(), 1e-9 * (1.0 + over.norm())) << GetParam() << ", slot " << slot;
   }
 }
 

@@ -212,6 +212,15 @@ void FilterFlags::add(CLI::App& cmd, bool batch) {
           return {};
         });
         break;
+      case FilterOption::Kind::Real:
+        flag->check([lo = static_cast<double>(o.min), hi = static_cast<double>(o.max)](const std::string& v) -> std::string {
+          double d = 0.0;
+          if (!CLI::detail::lexical_cast(v, d) || !(d > lo && d < hi)) {
+            return "must be in (" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "), found " + v;
+          }
+          return {};
+        });
+        break;
     }
     flag->capture_default_str();
   }

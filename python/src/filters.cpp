@@ -93,11 +93,14 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("stale", &SeifOptions::stale,
                      "deactivate first the active landmarks not observed in the last `stale` steps, the "
                      "longest unobserved first (0: off)")
+      .def_readwrite("omega", &SeifOptions::omega,
+                     "over-relaxation of the amortised mean, in (0, 2): each relaxed landmark moves omega times its "
+                     "Gauss-Seidel step (1: eq. 42)")
       .def_readwrite("coarse", &SeifOptions::coarse,
                      "off or rigid: the amortised mean also corrects the map's rigid motion each step (O(1))")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho", "gauge", "coarse", "stale"});
+                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho", "gauge", "coarse", "stale", "omega"});
       });
 }
 

@@ -23,7 +23,8 @@ nlohmann::json toJson(const SeifOptions& o) {
       case FilterOption::Kind::Integer: j[std::string(option.key)] = std::stoll(value); break;
       case FilterOption::Kind::Seed: j[std::string(option.key)] = std::stoull(value); break;
       case FilterOption::Kind::Length:
-      case FilterOption::Kind::Fraction: j[std::string(option.key)] = std::stod(value); break;
+      case FilterOption::Kind::Fraction:
+      case FilterOption::Kind::Real: j[std::string(option.key)] = std::stod(value); break;
       case FilterOption::Kind::Profile: break;
     }
   }

@@ -83,6 +83,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.u64(static_cast<std::uint64_t>(o.gauge));
   out.u64(static_cast<std::uint64_t>(o.coarse));
   out.i64(o.stale);
+  out.f64(o.omega);
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -114,6 +115,10 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   if (in.version() >= 7) o.gauge = static_cast<SeifOptions::Gauge>(in.u64Max("gauge", 1));
   if (in.version() >= 8) o.coarse = static_cast<SeifOptions::Coarse>(in.u64Max("coarse", 1));
   if (in.version() >= 11) o.stale = in.i64In("stale", 0, kIntMax);  // earlier files: off (the spec's range)
+  if (in.version() >= 12) {  // earlier files: eq. (42) as published
+    o.omega = in.f64("omega");
+    if (!(o.omega > 0.0 && o.omega < 2.0)) in.fail("omega must be in (0, 2)");
+  }
   return o;
 }
 

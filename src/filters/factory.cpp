@@ -25,6 +25,7 @@ using options::formatReal;
 using options::parseBool;
 using options::parseInteger;
 using options::parseLength;
+using options::parseBetween;
 using options::parseFraction;
 using options::parseSeed;
 
@@ -43,7 +44,7 @@ void applyProfile(FilterSpec& s, std::string_view v);
 const std::string kProfileHelp = "a recommended configuration: consistent = " + std::string(kConsistentProfile) +
                                  " (honest covariances in constant time; README)";
 
-const std::array<FilterOption, 23> kOptions = {{
+const std::array<FilterOption, 24> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0, kProfileHelp,
      &applyProfile, [](const FilterSpec&) { return std::string(); }},
     {"linearization", kAll, kChoice, "standard|fej|invariant|oc", 0, 0,
@@ -77,6 +78,11 @@ const std::array<FilterOption, 23> kOptions = {{
      "K: landmarks relaxed per step besides the robot and the active ones (capped at the map size)",
      [](FilterSpec& s, std::string_view v) { s.seif.relax = static_cast<int>(parseInteger("relax", v, 0, kIntMax)); },
      [](const FilterSpec& s) { return std::to_string(s.seif.relax); }},
+    {"omega", kSeif, Opt::Kind::Real, "", 0, 2,
+     "over-relaxation of the K relaxed landmarks, in (0, 2): each moves omega times its Gauss-Seidel "
+     "step (1: eq. 42; near 2 the mean follows a loop closure many times faster)",
+     [](FilterSpec& s, std::string_view v) { s.seif.omega = parseBetween("omega", v, 0.0, 2.0); },
+     [](const FilterSpec& s) { return formatReal(s.seif.omega); }},
     {"mean", kSeif, kChoice, "amortized|exact", 0, 0,
      "mean recovery: amortized (constant time) or exact (a sparse Cholesky solve each step)",
      [](FilterSpec& s, std::string_view v) { s.seif.mean = SeifOptions::parseMean(v); },

@@ -43,6 +43,15 @@ double parseLength(std::string_view key, std::string_view value) {
   return v;
 }
 
+double parseBetween(std::string_view key, std::string_view value, double lo, double hi) {
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
+  if (ec != std::errc() || end != value.data() + value.size() || !(v > lo && v < hi)) {
+    bad(key, value, "is not a number in (" + formatReal(lo) + ", " + formatReal(hi) + ")");
+  }
+  return v;
+}
+
 double parseFraction(std::string_view key, std::string_view value) {
   double v = 0.0;
   const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);

@@ -13,6 +13,8 @@ std::int64_t parseInteger(std::string_view key, std::string_view value, std::int
 double parseReal(std::string_view key, std::string_view value, double lo, double hi, bool hi_open);
 /// A finite number >= 0 [m].
 double parseLength(std::string_view key, std::string_view value);
+/// A finite number in the open interval (lo, hi).
+double parseBetween(std::string_view key, std::string_view value, double lo, double hi);
 /// A fraction in [0, 1).
 double parseFraction(std::string_view key, std::string_view value);
 std::uint64_t parseSeed(std::string_view value);

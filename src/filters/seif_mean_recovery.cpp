@@ -43,7 +43,7 @@ void SeifSlam::recoverMean(bool with_active, ActiveBlock block) {
     store_.relaxRobot();
   }
   for (int done = 0; done < random;) {
-    store_.relaxLandmarks(std::span<const int>(picks.data(), static_cast<std::size_t>(chunk)));
+    store_.relaxLandmarks(std::span<const int>(picks.data(), static_cast<std::size_t>(chunk)), options_.omega);
     done += chunk;
     chunk = std::min(random - done, kChunk);
     draw(chunk);
@@ -58,7 +58,7 @@ void SeifSlam::relaxMean(int sweeps) {
   block_ = ActiveBlock::Stale;
   for (int s = 0; s < sweeps; ++s) {
     store_.relaxRobot();
-    for (int i = 0; i < store_.size(); ++i) store_.relaxLandmark(i);
+    for (int i = 0; i < store_.size(); ++i) store_.relaxLandmark(i, options_.omega);
   }
 }
 

@@ -27,6 +27,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
   }
   if (options.relax < 0) throw InvalidArgument("seif: --relax must be >= 0");
   if (options.stale < 0) throw InvalidArgument("seif: stale must be >= 0");
+  if (!(options.omega > 0.0 && options.omega < 2.0)) throw InvalidArgument("seif: omega must be in (0, 2)");
   if (options.beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
   if (!(options.reanchor >= 0.0) || !std::isfinite(options.reanchor)) {
     throw InvalidArgument("seif: reanchor must be finite and >= 0");
@@ -396,7 +397,7 @@ void SeifSlam::mergeLandmarks(int keep, int drop) {
   if (options_.mean == SeifOptions::Mean::Exact) {
     recoverExactMean();
   } else {
-    store_.relaxLandmark(kept);
+    store_.relaxLandmark(kept, 1.0);  // the merged landmark, once: eq. (42) itself
   }
   deactivateSurplus(false);
 }

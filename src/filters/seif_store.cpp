@@ -685,7 +685,7 @@ void SeifStore::relaxRobot() {
   blocks_touched_ += 1 + robot_links_.size();
 }
 
-void SeifStore::relaxLandmark(int slot) {
+void SeifStore::relaxLandmark(int slot, double omega) {
   const Node& node = nodes_[static_cast<std::size_t>(slot)];
   Vec2 rhs = node.b;
   if (coarse_ && !node.coarse_dirty) {
@@ -706,7 +706,12 @@ void SeifStore::relaxLandmark(int slot) {
         << " is not positive definite at step " << step_;
     throw NumericError(msg.str());
   }
-  assignMean(slot, llt.solve(rhs));
+  if (omega == 1.0) {
+    assignMean(slot, llt.solve(rhs));
+  } else {  // successive over-relaxation (Saad, Iterative Methods for Sparse Linear Systems, §4.1)
+    const Vec2 current = mean(slot);
+    assignMean(slot, Vec2(current + omega * (llt.solve(rhs) - current)));
+  }
   blocks_touched_ += 1 + node.links.size() + (node.active >= 0 ? 1 : 0);
 }
 
@@ -717,9 +722,9 @@ bool SeifStore::cacheResident() const {
   return nodes_.size() * sizeof(Node) + 2 * landmark_links_ * sizeof(Link) <= kResidentBytes;
 }
 
-void SeifStore::relaxLandmarks(std::span<const int> slots) {
+void SeifStore::relaxLandmarks(std::span<const int> slots, double omega) {
   if (cacheResident()) {  // the prefetches would only add work
-    for (int s : slots) relaxLandmark(s);
+    for (int s : slots) relaxLandmark(s, omega);
     return;
   }
   for (int s : slots) {  // round 2: their links (round 1, the nodes: prefetch())
@@ -731,7 +736,7 @@ void SeifStore::relaxLandmarks(std::span<const int> slots) {
   for (int s : slots) {  // round 3: their neighbours' means
     for (const Link& l : node(s).links) __builtin_prefetch(&node(l.slot).mu);
   }
-  for (int s : slots) relaxLandmark(s);
+  for (int s : slots) relaxLandmark(s, omega);
 }
 
 void SeifStore::solveLocalMean(Passive passive) {

@@ -209,7 +209,9 @@ class SeifStore {
 
   // ---- Gauss-Seidel relaxation of the mean, eq. (42): mu_i = H_ii^-1 (b_i - sum H_ij mu_j)
   void relaxRobot();
-  void relaxLandmark(int slot);
+  /// eq. (42) for one landmark, over-relaxed by `omega` (SeifOptions::omega; 1: eq. 42 itself):
+  /// mu_i <- mu_i + omega (H_ii^-1 (b_i - sum_j H_ij mu_j) - mu_i).
+  void relaxLandmark(int slot, double omega);
   /// Solves the gathered block's mean jointly, its links to the rest on the right-hand
   /// side. The block must hold exactly the active landmarks (in any order): the robot's
   /// links then all lie inside it, and the landmarks' links to passive ones outside.
@@ -237,7 +239,7 @@ class SeifStore {
   /// dependent pointers: node, links, neighbours' means. Their memory is prefetched first,
   /// round by round, so that the cache misses of the slots overlap instead of adding up.
   /// When the map fits in the caches (cacheResident()) the prefetches are skipped.
-  void relaxLandmarks(std::span<const int> slots);
+  void relaxLandmarks(std::span<const int> slots, double omega);
 
  private:
   friend struct CheckpointAccess;  // checkpoints: src/filters/*_state.cpp

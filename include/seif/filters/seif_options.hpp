@@ -23,6 +23,13 @@ struct SeifOptions {
   /// Amortized: constant-time coordinate descent. Exact: sparse Cholesky solve of H mu = b
   /// after every update ("SEIF with exact mu" in the paper's table; not constant time).
   Mean mean = Mean::Amortized;
+  /// The amortised mean's over-relaxation, in (0, 2): each of the K relaxed landmarks moves
+  /// omega times its Gauss-Seidel step, mu_i <- mu_i + omega (eq. 42 - mu_i) (successive
+  /// over-relaxation). 1: eq. (42) as published. Gauss-Seidel removes the smooth part of the
+  /// mean's error - a map bent by a loop closure - at the rate of H's slowest modes; over-
+  /// relaxation near 2 removes it many times faster at the same cost (docs/consistency.md,
+  /// "Over-relaxation"). Each step still lowers 1/2 mu^T H mu - b^T mu for any omega in (0, 2).
+  double omega = 1.0;
   /// Weakest: deactivate the landmarks with the weakest normalised link to the robot (the
   /// paper). Oldest: those observed least recently.
   Deactivate deactivate = Deactivate::Weakest;
