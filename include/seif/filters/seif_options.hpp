@@ -28,7 +28,7 @@ struct SeifOptions {
   /// over-relaxation). 1: eq. (42) as published. Gauss-Seidel removes the smooth part of the
   /// mean's error - a map bent by a loop closure - at the rate of H's slowest modes; over-
   /// relaxation near 2 removes it many times faster at the same cost (docs/consistency.md,
-  /// "Over-relaxation"). Each step still lowers 1/2 mu^T H mu - b^T mu for any omega in (0, 2).
+  /// "The mean's over-relaxation"). Each step still lowers 1/2 mu^T H mu - b^T mu for any omega in (0, 2).
   double omega = 1.0;
   /// Weakest: deactivate the landmarks with the weakest normalised link to the robot (the
   /// paper). Oldest: those observed least recently.
