@@ -382,7 +382,7 @@ void bindSlamFilter(py::module_& m) {
       .def("information_vector", &SeifSlam::informationVector, "b")
       .def("exact_mean", &SeifSlam::exactMean, py::call_guard<py::gil_scoped_release>(),
            "H^-1 b by sparse Cholesky, without changing the filter")
-      .def("relax_mean", &SeifSlam::relaxMean, py::arg("sweeps"), "Gauss-Seidel sweeps of the mean over every variable")
+      .def("relax_mean", &SeifSlam::relaxMean, py::arg("sweeps"), "Gauss-Seidel sweeps of the mean over every variable (the landmarks over-relaxed by options.omega)")
       .def("active_landmarks", &SeifSlam::activeLandmarks, "ids of the landmarks linked to the robot")
       .def_property_readonly("options", &SeifSlam::options)
       .def("last_sparsification_residual", &SeifSlam::lastSparsificationResidual)

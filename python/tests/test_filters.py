@@ -160,6 +160,12 @@ def test_seif_options_and_config_fields():
     assert isinstance(f, seif.SeifSlam)
     assert f.options.active == 4 and f.options.sparsify.text == "eseif"
     assert "Cartesian" in f.sensor_model
+    # The amortised mean's over-relaxation must lie in (0, 2): the filter refuses it otherwise.
+    options.omega = 2.0
+    with pytest.raises(seif.InvalidArgument, match="omega must be in"):
+        seif.make_filter("seif", np.zeros(3), config, options)
+    options.omega = 1.95
+    assert seif.make_filter("seif", np.zeros(3), config, options).options.omega == 1.95
 
 
 def test_the_option_table_names_every_option_once():

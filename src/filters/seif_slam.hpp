@@ -92,7 +92,8 @@ class SeifSlam final : public SlamFilter {
   std::size_t informationScalings() const { return scalings_; }
   /// The exact mean H^-1 b (sparse Cholesky), without changing the filter.
   Eigen::VectorXd exactMean() const;
-  /// Runs `sweeps` full Gauss-Seidel sweeps of the mean over every variable.
+  /// Runs `sweeps` full Gauss-Seidel sweeps of the mean over every variable (the landmarks
+  /// over-relaxed by SeifOptions::omega).
   void relaxMean(int sweeps);
   /// The upper bound kept on landmark `id`'s marginal covariance (seif_bounds.hpp;
   /// SeifOptions::bounds, else InvalidArgument).

@@ -30,9 +30,9 @@ struct FilterSpec {
 struct FilterOption {
   enum class Scope { AllButBatch, Seif, Batch };  ///< which filters take it
   /// Length: a finite number >= 0 [m]. Real: a finite number strictly between min and max.
-  /// Profile: a spec-only shorthand that sets other
-  /// options (the keys after it in the spec override it); the canonical spec, the flags and
-  /// metrics.json list the options it set, not it.
+  /// Profile: a spec-only shorthand that sets other options (the keys after it in the spec
+  /// override it); the canonical spec, the flags and metrics.json list the options it set,
+  /// not it.
   enum class Kind { Choice, Integer, Seed, Length, Fraction, Real, Profile };
   std::string_view key;      ///< e.g. "relax-order"
   Scope scope;
@@ -56,8 +56,8 @@ bool takesOption(std::string_view name, const FilterOption& option);
 /// profile=consistent, the recommended constant-time configuration (README, "Consistent in
 /// constant time"): linearization=invariant, iterations=3, active=30, motion=deferred, the
 /// amortised mean with its coarse level (coarse=rigid) relaxing 40 landmarks a step,
-/// over-relaxed (omega=1.95), and the
-/// sparsification that claims nothing on the free directions (gauge=kept). With
+/// over-relaxed (omega=1.95), and the sparsification that claims nothing on the free
+/// directions (gauge=kept). With
 /// sparsify=conservative add gauge=paper (the two do not combine).
 inline constexpr std::string_view kConsistentProfile =
     "linearization=invariant,iterations=3,active=30,motion=deferred,coarse=rigid,relax=40,omega=1.95,gauge=kept";
