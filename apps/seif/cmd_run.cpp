@@ -125,6 +125,11 @@ void run(const RunArgs& args) {
     std::printf("  the filter before smoothing: landmark RMSE %s m | ATE %s m | GPS RMSE %s m | map %s m from the batch's\n",
                 metres(f.landmark).c_str(), metres(f.ate).c_str(), metres(f.gps).c_str(),
                 metres(r.filter_map_distance).c_str());
+    if (r.filter_trajectory_distance) {
+      const Vec2& d = *r.filter_trajectory_distance;
+      std::printf("  the filter's trajectory from the batch's: RMS %s m, median %s m\n", metres(d(0)).c_str(),
+                  metres(d(1)).c_str());
+    }
   }
   if (r.association && args.association.method() == "known") {
     std::printf("  association known: %zu observations, %zu without a landmark id dropped\n", r.association->observations,

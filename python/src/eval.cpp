@@ -141,6 +141,8 @@ void bindRun(py::module_& m) {
       .def_readonly("filter_errors", &RunReport::filter_errors, "smooth: the filter's errors before the batch")
       .def_readonly("filter_map_distance", &RunReport::filter_map_distance,
                     "smooth: RMS distance of the filter's map from the batch's [m]")
+      .def_readonly("filter_trajectory_distance", &RunReport::filter_trajectory_distance,
+                    "with smooth: [RMS, median] distance of the filter's position from the batch's at every pose [m]")
       .def_readonly("filter_covariance_ratio", &RunReport::filter_covariance_ratio,
                     "with smooth: trace(filter's landmark covariance) / trace(batch's) over the landmarks, "
                     "[median, 10th, 90th percentile]; below 1 the filter claims too little variance")

@@ -148,3 +148,11 @@ def test_smooth_python_equals_cli(cli, simulated_folder, tmp_path):
     assert 0 < ratio["p10"] <= ratio["median"] <= ratio["p90"]
     assert report.filter_errors.ate == py_metrics["filter_before_smoothing"]["ate_rmse"]
     assert len(report.output.filter_trajectory) == len(report.output.trajectory)
+    # The trajectory's distance from the batch's, against the two written trajectories.
+    tum_batch = np.loadtxt(py_dir / "trajectory.tum", comments="#")
+    tum_filter = np.loadtxt(py_dir / "trajectory_filter.tum", comments="#")
+    gaps = np.linalg.norm(tum_filter[:, 1:3] - tum_batch[:, 1:3], axis=1)
+    rms, median = report.filter_trajectory_distance
+    assert [rms, median] == [py_metrics["filter_before_smoothing"]["trajectory_distance_to_batch"][k] for k in ("rms", "median")]
+    assert rms == pytest.approx(np.sqrt(np.mean(gaps**2)), rel=1e-5, abs=1e-6) and rms > 0
+    assert median == pytest.approx(np.median(gaps), rel=1e-5, abs=1e-6)

@@ -170,6 +170,12 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
                                     {"gps_median_error", optionalJson(f.gps_median)},
                                     {"gps_rmse_without_jumps", optionalJson(f.gps_without_jumps)},
                                     {"map_distance_to_batch", optionalJson(r.filter_map_distance)}};
+    if (r.filter_trajectory_distance) {
+      j["filter_before_smoothing"]["trajectory_distance_to_batch"] = {
+          {"rms", (*r.filter_trajectory_distance)(0)},
+          {"median", (*r.filter_trajectory_distance)(1)},
+          {"definition", "distance of the filter's position from the batch's at every pose [m]"}};
+    }
     if (r.filter_covariance_ratio) {
       const Vec3& c = *r.filter_covariance_ratio;
       j["filter_before_smoothing"]["landmark_covariance_ratio_to_batch"] = {
@@ -322,6 +328,17 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
     double sum = 0.0;
     for (int id : filter->landmarkIds()) sum += (filtered->landmark(id) - filter->landmark(id)).squaredNorm();
     if (!filter->landmarkIds().empty()) report.filter_map_distance = std::sqrt(sum / static_cast<double>(filter->landmarkIds().size()));
+    const std::vector<TimedPose>& batch_poses = report.output.trajectory;
+    const std::vector<TimedPose>& filter_poses = report.output.filter_trajectory;
+    if (!batch_poses.empty() && batch_poses.size() == filter_poses.size()) {
+      std::vector<double> d(batch_poses.size());
+      double squares = 0.0;
+      for (std::size_t k = 0; k < d.size(); ++k) {
+        d[k] = (filter_poses[k].pose.head<2>() - batch_poses[k].pose.head<2>()).norm();
+        squares += d[k] * d[k];
+      }
+      report.filter_trajectory_distance = Vec2(std::sqrt(squares / static_cast<double>(d.size())), quantile(d, 0.5));
+    }
     std::vector<double> ratios;
     for (int id : filter->landmarkIds()) {
       const double batch = filter->landmarkCovariance(id).trace();

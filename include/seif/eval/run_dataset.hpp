@@ -76,6 +76,10 @@ struct RunReport {
   std::optional<SmootherReport> smoother;     ///< a smoother's solve
   std::optional<RunErrors> filter_errors;     ///< with `smooth`: the filter's, before the batch
   std::optional<double> filter_map_distance;  ///< with `smooth`: RMS distance of the filter's map from the batch's [m]
+  /// With `smooth`: the distance of the filter's position from the batch's at every pose of
+  /// the trajectory (the start and each step), RMS and median [m]. Where a dataset's ground
+  /// truth is poor (Victoria Park's GPS), the batch MAP under the same models is the reference.
+  std::optional<Vec2> filter_trajectory_distance;
   /// With `smooth`: over the landmarks, trace(filter's covariance) / trace(batch's), median
   /// and 10th / 90th percentile. The batch's marginals under the same models are the honest
   /// reference: below 1 the filter claims too little variance.
