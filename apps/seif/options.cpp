@@ -212,11 +212,13 @@ void FilterFlags::add(CLI::App& cmd, bool batch) {
           return {};
         });
         break;
-      case FilterOption::Kind::Real:
-        flag->check([lo = static_cast<double>(o.min), hi = static_cast<double>(o.max)](const std::string& v) -> std::string {
-          double d = 0.0;
-          if (!CLI::detail::lexical_cast(v, d) || !(d > lo && d < hi)) {
-            return "must be in (" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "), found " + v;
+      case FilterOption::Kind::Real:  // the table's own parser checks the range and words the error
+        flag->check([set = o.set](const std::string& v) -> std::string {
+          FilterSpec scratch;
+          try {
+            set(scratch, v);
+          } catch (const InvalidArgument& e) {
+            return e.what();
           }
           return {};
         });

@@ -14,6 +14,13 @@ namespace {
   throw InvalidArgument(std::string(key) + "=" + std::string(value) + " " + what);
 }
 
+double finiteNumber(std::string_view key, std::string_view value) {
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
+  if (ec != std::errc() || end != value.data() + value.size() || !std::isfinite(v)) bad(key, value, "is not a finite number");
+  return v;
+}
+
 }  // namespace
 
 std::int64_t parseInteger(std::string_view key, std::string_view value, std::int64_t lo, std::int64_t hi) {
@@ -25,9 +32,7 @@ std::int64_t parseInteger(std::string_view key, std::string_view value, std::int
 }
 
 double parseReal(std::string_view key, std::string_view value, double lo, double hi, bool hi_open) {
-  double v = 0.0;
-  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
-  if (ec != std::errc() || end != value.data() + value.size() || !std::isfinite(v)) bad(key, value, "is not a finite number");
+  const double v = finiteNumber(key, value);
   if (v < lo || v > hi || (hi_open && v == hi)) {
     bad(key, value, "is outside [" + formatReal(lo) + ", " + formatReal(hi) + (hi_open ? ")" : "]"));
   }
@@ -44,11 +49,8 @@ double parseLength(std::string_view key, std::string_view value) {
 }
 
 double parseBetween(std::string_view key, std::string_view value, double lo, double hi) {
-  double v = 0.0;
-  const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
-  if (ec != std::errc() || end != value.data() + value.size() || !(v > lo && v < hi)) {
-    bad(key, value, "is not a number in (" + formatReal(lo) + ", " + formatReal(hi) + ")");
-  }
+  const double v = finiteNumber(key, value);
+  if (!(v > lo && v < hi)) bad(key, value, "is outside (" + formatReal(lo) + ", " + formatReal(hi) + ")");
   return v;
 }
 
