@@ -158,7 +158,9 @@ INSTANTIATE_TEST_SUITE_P(Filters, CheckpointResume,
                                            "seif:profile=consistent,motion=deferred,bounds=true",
                                            "seif:profile=consistent,active=3",
                                            "seif:linearization=invariant,gauge=kept,active=4",
-                                           "seif:linearization=invariant,gauge=kept,active=4,coarse=rigid"));
+                                           "seif:linearization=invariant,gauge=kept,active=4,coarse=rigid",
+                                           "seif:relax-order=wildfire,wildfire=0.01,relax=3",
+                                           "seif:profile=consistent,relax-order=wildfire,motion=deferred"));
 
 TEST(Checkpoint, RandomOrderDependsOnTheSavedEngine) {
   // The resume test can fail: the same checkpoint with the random engine restarted from
@@ -371,7 +373,7 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
     for (const auto& [file, spec] : {std::pair{"ekf.ckpt", "ekf:linearization=fej"}, std::pair{"eif.ckpt", "eif"},
                                      std::pair{"seif.ckpt", "seif:active=3,relax-order=random"},
                                      std::pair{"eseif.ckpt", "seif:sparsify=eseif,active=3"},
-                                     std::pair{"seif-coarse.ckpt", "seif:profile=consistent,active=3,stale=5"}}) {
+                                     std::pair{"seif-coarse.ckpt", "seif:profile=consistent,active=3,stale=5,wildfire=0.001"}}) {
       std::unique_ptr<SlamFilter> f = makeFilter(spec, s.start, test::configFor(s));
       for (const Step& step : s.steps) f->step(step.u, step.observations);
       f->save(root / "corpus" / "fuzz_checkpoint" / file, CheckpointExtras{12, {{"spec", spec}}});
@@ -418,7 +420,8 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   // term taken out of the rows and the sums, which then hold V^T (b - H mu) and V^T H V with
   // the robot's terms added fresh, as a version-9 file's do.
   for (const char* file :
-       {"seif-coarse-v8.ckpt", "seif-coarse-v9.ckpt", "seif-coarse-v10.ckpt", "seif-coarse-v11.ckpt", "seif-coarse.ckpt"}) {
+       {"seif-coarse-v8.ckpt", "seif-coarse-v9.ckpt", "seif-coarse-v10.ckpt", "seif-coarse-v11.ckpt", "seif-coarse-v12.ckpt",
+        "seif-coarse.ckpt"}) {
     const auto f = load(root / "corpus" / "fuzz_checkpoint" / file);
     const SeifStore& store = dynamic_cast<const SeifSlam&>(*f).store();
     ASSERT_TRUE(store.coarse()) << file;
@@ -444,6 +447,13 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
     EXPECT_EQ(dynamic_cast<const SeifSlam&>(*load(root / "corpus" / "fuzz_checkpoint" / file)).options().omega, 1.0) << file;
   }
   EXPECT_EQ(dynamic_cast<const SeifSlam&>(*stale).options().omega, 1.95);
+  // Version 13 added the wildfire order and its queue: older files keep their cyclic order
+  // (the profile's before it, seif-coarse-v12.ckpt); the current profile's file holds a queue.
+  const auto v12 = load(root / "corpus" / "fuzz_checkpoint" / "seif-coarse-v12.ckpt");
+  EXPECT_EQ(dynamic_cast<const SeifSlam&>(*v12).options().relax_order, SeifOptions::RelaxOrder::Cyclic);
+  EXPECT_EQ(dynamic_cast<const SeifSlam&>(*v12).wildfireQueued(), 0u);
+  EXPECT_EQ(dynamic_cast<const SeifSlam&>(*stale).options().relax_order, SeifOptions::RelaxOrder::Wildfire);
+  EXPECT_GT(dynamic_cast<const SeifSlam&>(*stale).wildfireQueued(), 0u);
 }
 #endif
 

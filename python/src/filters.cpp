@@ -42,10 +42,11 @@ void bindSeifOptions(py::module_& m) {
                                        &SeifOptions::parseRecovery, &nameOf<SeifOptions::Recovery>)
       .value("AfterMeasurement", SeifOptions::Recovery::AfterMeasurement)
       .value("BeforeMeasurement", SeifOptions::Recovery::BeforeMeasurement);
-  bindNamedEnum<SeifOptions::RelaxOrder>(o, "RelaxOrder", "'cyclic' | 'random'", &SeifOptions::parseRelaxOrder,
+  bindNamedEnum<SeifOptions::RelaxOrder>(o, "RelaxOrder", "'cyclic' | 'random' | 'wildfire'", &SeifOptions::parseRelaxOrder,
                                          &nameOf<SeifOptions::RelaxOrder>)
       .value("Random", SeifOptions::RelaxOrder::Random)
-      .value("Cyclic", SeifOptions::RelaxOrder::Cyclic);
+      .value("Cyclic", SeifOptions::RelaxOrder::Cyclic)
+      .value("Wildfire", SeifOptions::RelaxOrder::Wildfire);
   bindNamedEnum<SeifOptions::Sparsify>(o, "Sparsify", "'seif' | 'eseif'", &SeifOptions::parseSparsify,
                                        &nameOf<SeifOptions::Sparsify>)
       .value("Seif", SeifOptions::Sparsify::Seif)
@@ -96,11 +97,14 @@ void bindSeifOptions(py::module_& m) {
       .def_readwrite("omega", &SeifOptions::omega,
                      "over-relaxation of the amortised mean, in (0, 2): each relaxed landmark moves omega times its "
                      "Gauss-Seidel step (1: eq. 42)")
+      .def_readwrite("wildfire", &SeifOptions::wildfire,
+                     "relax_order Wildfire: the move of a landmark's mean, in its conditional standard deviations, "
+                     "that queues its neighbours for relaxation")
       .def_readwrite("coarse", &SeifOptions::coarse,
                      "off or rigid: the amortised mean also corrects the map's rigid motion each step (O(1))")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"active", "relax", "mean", "deactivate", "recovery", "relax_order", "seed", "sparsify",
-                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho", "gauge", "coarse", "stale", "omega"});
+                          "covariance", "beta", "reanchor", "blanket", "bounds", "motion", "rho", "gauge", "coarse", "stale", "omega", "wildfire"});
       });
 }
 

@@ -22,14 +22,15 @@
 namespace seif {
 
 inline constexpr std::string_view kArchiveMagic = "SEIFCKPT";
-inline constexpr std::uint32_t kArchiveVersion = 12;  // 2: the config no longer holds noise sigmas; 3: seif blanket;
+inline constexpr std::uint32_t kArchiveVersion = 13;  // 2: the config no longer holds noise sigmas; 3: seif blanket;
                                                       // 4: seif covariance bounds; 5: seif deferred motion;
                                                       // 6: seif conservative sparsification's scale;
                                                       // 7: seif gauge rule; 8: seif mean's coarse level;
                                                       // 9: its kept rows without their robot terms;
                                                       // 10: whether the seif's robot-active block is solved;
                                                       // 11: seif stale-first deactivation;
-                                                      // 12: seif mean's over-relaxation
+                                                      // 12: seif mean's over-relaxation;
+                                                      // 13: seif wildfire relaxation order
 inline constexpr std::size_t kArchiveHeaderSize = 32;
 
 /// FNV-1a 64 of `bytes` (the payload checksum).

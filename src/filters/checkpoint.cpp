@@ -84,6 +84,7 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
   out.u64(static_cast<std::uint64_t>(o.coarse));
   out.i64(o.stale);
   out.f64(o.omega);
+  out.f64(o.wildfire);
 }
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
@@ -95,7 +96,7 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   o.mean = static_cast<SeifOptions::Mean>(in.u64Max("mean", 1));
   o.deactivate = static_cast<SeifOptions::Deactivate>(in.u64Max("deactivate", 1));
   o.recovery = static_cast<SeifOptions::Recovery>(in.u64Max("recovery", 1));
-  o.relax_order = static_cast<SeifOptions::RelaxOrder>(in.u64Max("relax order", 1));
+  o.relax_order = static_cast<SeifOptions::RelaxOrder>(in.u64Max("relax order", in.version() >= 13 ? 2 : 1));
   o.seed = in.u64("seed");
   o.sparsify = static_cast<SeifOptions::Sparsify>(in.u64Max("sparsify", in.version() >= 6 ? 2 : 1));
   o.covariance = static_cast<SeifOptions::Covariance>(in.u64Max("covariance", in.version() >= 4 ? 2 : 1));
@@ -118,6 +119,10 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   if (in.version() >= 12) {  // earlier files: eq. (42) as published
     o.omega = in.f64("omega");
     if (!(o.omega > 0.0 && o.omega < 2.0)) in.fail("omega must be in (0, 2)");
+  }
+  if (in.version() >= 13) {
+    o.wildfire = in.f64("wildfire");
+    if (!(o.wildfire > 0.0 && o.wildfire < 100.0)) in.fail("wildfire must be in (0, 100)");
   }
   return o;
 }

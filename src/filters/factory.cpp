@@ -44,7 +44,7 @@ void applyProfile(FilterSpec& s, std::string_view v);
 const std::string kProfileHelp = "a recommended configuration: consistent = " + std::string(kConsistentProfile) +
                                  " (honest covariances in constant time; README)";
 
-const std::array<FilterOption, 24> kOptions = {{
+const std::array<FilterOption, 25> kOptions = {{
     {"profile", kSeif, Opt::Kind::Profile, "consistent", 0, 0, kProfileHelp,
      &applyProfile, [](const FilterSpec&) { return std::string(); }},
     {"linearization", kAll, kChoice, "standard|fej|invariant|oc", 0, 0,
@@ -100,10 +100,16 @@ const std::array<FilterOption, 24> kOptions = {{
      "relax the amortized mean before the measurement update (the book's order) or after it",
      [](FilterSpec& s, std::string_view v) { s.seif.recovery = SeifOptions::parseRecovery(v); },
      [](const FilterSpec& s) { return std::string(optionName(s.seif.recovery)); }},
-    {"relax-order", kSeif, kChoice, "random|cyclic", 0, 0,
-     "which K landmarks each step relaxes: the next in map order (cyclic) or drawn at random (the paper)",
+    {"relax-order", kSeif, kChoice, "random|cyclic|wildfire", 0, 0,
+     "which K landmarks each step relaxes: the next in map order (cyclic), drawn at random (the "
+     "paper), or first the neighbours of landmarks whose mean moved (wildfire), then cyclic",
      [](FilterSpec& s, std::string_view v) { s.seif.relax_order = SeifOptions::parseRelaxOrder(v); },
      [](const FilterSpec& s) { return std::string(optionName(s.seif.relax_order)); }},
+    {"wildfire", kSeif, Opt::Kind::Real, "", 0, 100,
+     "relax-order=wildfire: the move of a landmark's mean, in its conditional standard deviations, "
+     "that queues its neighbours for relaxation",
+     [](FilterSpec& s, std::string_view v) { s.seif.wildfire = parseBetween("wildfire", v, 0.0, 100.0); },
+     [](const FilterSpec& s) { return formatReal(s.seif.wildfire); }},
     {"covariance", kSeif, kChoice, "exact|local|conservative", 0, 0,
      "how poseCovariance() and landmarkCovariance() are recovered: exact (one sparse factorisation "
      "per changed H), local (a bounded blanket's, constant time, never larger than exact) or "

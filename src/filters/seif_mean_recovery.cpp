@@ -22,11 +22,20 @@ void SeifSlam::recoverMean(bool with_active, ActiveBlock block) {
   std::uniform_int_distribution<int> pick(0, std::max(0, n - 1));
   // K is capped at the map's size: relaxing a landmark twice in one pass is pointless.
   const int random = std::min(options_.relax, n);
+  // Wildfire: the active landmarks' means moved with the last measurements (the block
+  // solves); each that moved far enough queues its neighbours first.
+  const bool wildfire = this->wildfire();
+  if (wildfire) {
+    for (const SeifStore::RobotLink& l : store_.robotLinks()) frontier_.moved(store_, l.slot);
+  }
   auto draw = [&](int count) {
     for (int i = 0; i < count; ++i) {
-      const int slot = options_.relax_order == SeifOptions::RelaxOrder::Cyclic
-                           ? static_cast<int>(relax_cursor_++ % static_cast<std::size_t>(n))
-                           : pick(rng_);
+      int slot = wildfire ? frontier_.next([this](int id) { return book_.find(id); }) : -1;
+      if (slot < 0) {
+        slot = options_.relax_order == SeifOptions::RelaxOrder::Random
+                   ? pick(rng_)
+                   : static_cast<int>(relax_cursor_++ % static_cast<std::size_t>(n));
+      }
       picks[static_cast<std::size_t>(i)] = slot;
       store_.prefetch(slot);
     }
@@ -44,6 +53,9 @@ void SeifSlam::recoverMean(bool with_active, ActiveBlock block) {
   }
   for (int done = 0; done < random;) {
     store_.relaxLandmarks(std::span<const int>(picks.data(), static_cast<std::size_t>(chunk)), options_.omega);
+    if (wildfire) {
+      for (int i = 0; i < chunk; ++i) frontier_.moved(store_, picks[static_cast<std::size_t>(i)]);
+    }
     done += chunk;
     chunk = std::min(random - done, kChunk);
     draw(chunk);

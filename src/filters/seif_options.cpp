@@ -33,7 +33,7 @@ struct Names {
 constexpr Names<SeifOptions::Mean, 2> kMean{"mean recovery", {"amortized", "exact"}};
 constexpr Names<SeifOptions::Deactivate, 2> kDeactivate{"deactivation rule", {"weakest", "oldest"}};
 constexpr Names<SeifOptions::Recovery, 2> kRecovery{"recovery point", {"after-update", "before-update"}};
-constexpr Names<SeifOptions::RelaxOrder, 2> kRelaxOrder{"relaxation order", {"random", "cyclic"}};
+constexpr Names<SeifOptions::RelaxOrder, 3> kRelaxOrder{"relaxation order", {"random", "cyclic", "wildfire"}};
 constexpr Names<SeifOptions::Sparsify, 3> kSparsify{"sparsification", {"seif", "eseif", "conservative"}};
 constexpr Names<SeifOptions::Covariance, 3> kCovariance{"covariance recovery", {"exact", "local", "conservative"}};
 constexpr Names<SeifOptions::Motion, 2> kMotion{"motion timing", {"immediate", "deferred"}};

@@ -20,7 +20,8 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
       book_("seif", initial_pose, config),
       options_(options),
       store_(config.initial_pose_sigma.cwiseAbs2().cwiseInverse().asDiagonal(), initial_pose),
-      rng_(options.seed) {
+      rng_(options.seed),
+      frontier_(options.wildfire) {
   if (options.active < 1 || options.active >= kMaxLocalLandmarks) {
     throw InvalidArgument("seif: the number of active landmarks must be in 1.." +
                                 std::to_string(kMaxLocalLandmarks - 1));
@@ -28,6 +29,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
   if (options.relax < 0) throw InvalidArgument("seif: --relax must be >= 0");
   if (options.stale < 0) throw InvalidArgument("seif: stale must be >= 0");
   if (!(options.omega > 0.0 && options.omega < 2.0)) throw InvalidArgument("seif: omega must be in (0, 2)");
+  if (!(options.wildfire > 0.0 && options.wildfire < 100.0)) throw InvalidArgument("seif: wildfire must be in (0, 100)");
   if (options.beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
   if (!(options.reanchor >= 0.0) || !std::isfinite(options.reanchor)) {
     throw InvalidArgument("seif: reanchor must be finite and >= 0");
@@ -85,11 +87,13 @@ void SeifSlam::guarded(const Step& step) {
   const std::size_t scalings = scalings_;
   const ActiveBlock block = block_;
   store_.beginTransaction();
+  frontier_.begin();
   try {
     step();
     store_.settleCoarse();  // between steps every row is in the coarse sums (checkpoints)
   } catch (...) {
     store_.rollbackTransaction();
+    frontier_.rollback();
     book_.undo(book);
     relax_cursor_ = relax_cursor;
     sparsifications_ = sparsifications;
@@ -109,6 +113,7 @@ void SeifSlam::guarded(const Step& step) {
     throw;
   }
   store_.commitTransaction();
+  frontier_.commit();
 }
 
 void SeifSlam::motionUpdate(const MotionIncrement& increment) {
@@ -193,7 +198,10 @@ bool SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
     tighten = conservativeCovariance(store_, bound_slots_, bound_prior_, bound_ws_);
   }
   for (const PlannedObservation& p : plan) {
-    if (p.first) store_.addLandmark(p.z->landmark, p.initial);
+    if (p.first) {
+      const int slot = store_.addLandmark(p.z->landmark, p.initial);
+      if (wildfire()) frontier_.addLandmark(store_.node(slot).mu);
+    }
     std::optional<Anchors> anchors;
     if (invariant) anchors = Anchors{store_.robotAnchor(), store_.node(p.slot).anchor};
     const MeasurementInformation info = measurementInformation(sensor, x, store_.mean(p.slot), *p.z,
@@ -358,6 +366,7 @@ void SeifSlam::removeLandmark(int id) {
   // would link the robot to all its neighbours (more than a local block holds, on a dense map).
   if (store_.node(slot).active >= 0) deactivateSurplus(false, slot);
   store_.marginalizeLandmark(slot);
+  if (wildfire()) frontier_.removeSlot(slot);  // the last slot moved into its place
   book_.removeSlot(slot);
   invalidateFactor();
   deactivateSurplus(false);
@@ -390,6 +399,7 @@ void SeifSlam::mergeLandmarks(int keep, int drop) {
   // one's: both bounds hold, and so does the tightest point between them.
   const Mat2 bound = tighterBound(store_.node(k).bound, store_.node(d).bound);
   store_.mergeLandmarks(k, d);
+  if (wildfire()) frontier_.removeSlot(d);
   book_.removeSlot(d);
   invalidateFactor();
   const int kept = book_.find(keep);  // keep may have moved into d's slot

@@ -11,6 +11,7 @@
 #include <seif/filters/seif_options.hpp>
 #include "filters/information_ops.hpp"
 #include "filters/seif_bounds.hpp"
+#include "filters/seif_relax_frontier.hpp"
 #include "filters/seif_store.hpp"
 #include <seif/filters/slam_filter.hpp>
 
@@ -88,6 +89,8 @@ class SeifSlam final : public SlamFilter {
   /// information enters the store times kappa, every covariance leaves it times kappa). 1
   /// without them.
   double informationScale() const { return information_scale_; }
+  /// RelaxOrder::Wildfire: the landmarks queued for relaxation (0 with the other orders).
+  std::size_t wildfireQueued() const { return frontier_.queued(); }
   /// Sparsifications that raised kappa (Sparsify::Conservative, SeifOptions::rho).
   std::size_t informationScalings() const { return scalings_; }
   /// The exact mean H^-1 b (sparse Cholesky), without changing the filter.
@@ -214,6 +217,8 @@ class SeifSlam final : public SlamFilter {
   SeifStore store_;
   std::mt19937_64 rng_;
   std::size_t relax_cursor_ = 0;  // next landmark of a cyclic relaxation
+  RelaxFrontier frontier_;        // RelaxOrder::Wildfire's queue (empty otherwise)
+  bool wildfire() const { return options_.relax_order == SeifOptions::RelaxOrder::Wildfire; }
   double last_sparsification_residual_ = 0.0;
   std::size_t eseif_relocalizations_ = 0;
   std::size_t eseif_deferrals_ = 0;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -215,6 +216,16 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
   // Whether the next update skips that block's solve (a Gathered block is in buffers a
   // checkpoint does not hold: it loads as Stale, and is read again to the same values).
   out.u64(f.block_ == SeifSlam::ActiveBlock::Solved ? 1 : 0);
+  // RelaxOrder::Wildfire's queue (ids, in order) and per slot where each last spread from;
+  // empty with the other orders.
+  const RelaxFrontier::State fire = f.frontier_.state();
+  out.count(fire.queue.size());
+  for (int id : fire.queue) out.i64(id);
+  out.count(fire.spread_from.size());
+  for (std::size_t s = 0; s < fire.spread_from.size(); ++s) {
+    out.fixed(fire.spread_from[s]);
+    out.u64(fire.is_queued[s]);
+  }
 }
 
 void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
@@ -260,6 +271,23 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
   // Earlier files: solved again (the same mean up to rounding).
   f.block_ = in.version() >= 10 && in.u64Max("solved robot-active block", 1) == 1 ? SeifSlam::ActiveBlock::Solved
                                                                                    : SeifSlam::ActiveBlock::Stale;
+  RelaxFrontier::State fire;
+  if (in.version() >= 13) {
+    fire.queue.resize(in.count("wildfire queue", 8));
+    for (int& id : fire.queue) id = static_cast<int>(in.i64In("wildfire queue id", std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
+    const std::size_t slots = in.count("wildfire slots", 24);
+    fire.spread_from.resize(slots);
+    fire.is_queued.resize(slots);
+    for (std::size_t s = 0; s < slots; ++s) {
+      in.fixed("wildfire spread point", fire.spread_from[s], true);
+      fire.is_queued[s] = static_cast<unsigned char>(in.u64Max("wildfire queued flag", 1));
+    }
+  }
+  const std::size_t expected = f.wildfire() ? static_cast<std::size_t>(f.store_.size()) : 0;
+  if (fire.spread_from.size() != expected || (!f.wildfire() && !fire.queue.empty())) {
+    in.fail("the wildfire relaxation's state disagrees with the filter's options and map");
+  }
+  f.frontier_.restore(std::move(fire));
   f.invalidateFactor();
 }
 

@@ -46,6 +46,7 @@ void SeifStore::beginTransaction() {
   j.landmark_links = landmark_links_;
   j.max_landmark_links = max_landmark_links_;
   j.step = step_;
+  j.blocks_touched = blocks_touched_;
   j.entries.clear();
   j.saved.clear();
   j.saved_links.clear();
@@ -155,6 +156,7 @@ void SeifStore::rollbackTransaction() {
   landmark_links_ = j.landmark_links;
   max_landmark_links_ = j.max_landmark_links;
   step_ = j.step;
+  blocks_touched_ = j.blocks_touched;
   j.open = false;
 }
 

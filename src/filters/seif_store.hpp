@@ -337,6 +337,7 @@ class SeifStore {
     std::vector<RobotLink> robot_links;
     std::size_t nodes = 0, ids = 0, landmark_links = 0, max_landmark_links = 0;
     long step = 0;
+    std::size_t blocks_touched = 0;
     // What was saved, in order: a whole node (saved[index]) or a mean (means_of[index]).
     struct Entry {
       int slot;

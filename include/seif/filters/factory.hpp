@@ -56,11 +56,12 @@ bool takesOption(std::string_view name, const FilterOption& option);
 /// profile=consistent, the recommended constant-time configuration (README, "Consistent in
 /// constant time"): linearization=invariant, iterations=3, active=30, motion=deferred, the
 /// amortised mean with its coarse level (coarse=rigid) relaxing 40 landmarks a step,
-/// over-relaxed (omega=1.95), and the sparsification that claims nothing on the free
-/// directions (gauge=kept). With
+/// over-relaxed (omega=1.95) in the wildfire order (relax-order=wildfire: first where the
+/// mean moved), and the sparsification that claims nothing on the free directions
+/// (gauge=kept). With
 /// sparsify=conservative add gauge=paper (the two do not combine).
 inline constexpr std::string_view kConsistentProfile =
-    "linearization=invariant,iterations=3,active=30,motion=deferred,coarse=rigid,relax=40,omega=1.95,gauge=kept";
+    "linearization=invariant,iterations=3,active=30,motion=deferred,coarse=rigid,relax=40,omega=1.95,relax-order=wildfire,gauge=kept";
 
 /// "name:key=value,..." with every option the filter takes, in table order: the exact
 /// configuration a spec ran with, as metrics.json records it; parses back to an equal spec.

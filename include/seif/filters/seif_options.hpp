@@ -10,7 +10,7 @@ struct SeifOptions {
   enum class Mean { Amortized, Exact };
   enum class Deactivate { Weakest, Oldest };
   enum class Recovery { AfterMeasurement, BeforeMeasurement };
-  enum class RelaxOrder { Random, Cyclic };
+  enum class RelaxOrder { Random, Cyclic, Wildfire };
   enum class Sparsify { Seif, Eseif, Conservative };
   enum class Covariance { Exact, Local, Conservative };
   enum class Motion { Immediate, Deferred };
@@ -48,7 +48,14 @@ struct SeifOptions {
   /// landmark at the same rate, and neighbours in the map tend to be neighbours in memory,
   /// so a huge map's cache misses stay down), or drawn uniformly at Random (the paper; `seif
   /// paper` uses it). Equally accurate on the paper's world; docs/seif.md has the numbers.
+  /// Wildfire: first the neighbours of landmarks whose mean has moved by more than
+  /// `wildfire` of its conditional standard deviation, in the order they were queued, then
+  /// the cyclic order (src/filters/seif_relax_frontier.hpp; docs/consistency.md, "The
+  /// wildfire order").
   RelaxOrder relax_order = RelaxOrder::Cyclic;
+  /// RelaxOrder::Wildfire: the move, in conditional standard deviations
+  /// ((mu_i - r_i)^T H_ii (mu_i - r_i) > wildfire^2), that queues a landmark's neighbours.
+  double wildfire = 0.05;
   std::uint64_t seed = 1;  ///< for the random choice of relaxed landmarks
   /// How the robot's links are kept at `active`: Seif conditions the surplus away (paper
   /// eq. 44-51; overconfident, Eustice et al. 2005). Eseif marginalises the robot out and
@@ -122,7 +129,7 @@ struct SeifOptions {
   static Mean parseMean(std::string_view s);              ///< "amortized" | "exact"
   static Deactivate parseDeactivate(std::string_view s);  ///< "weakest" | "oldest"
   static Recovery parseRecovery(std::string_view s);      ///< "after-update" | "before-update"
-  static RelaxOrder parseRelaxOrder(std::string_view s);  ///< "random" | "cyclic"
+  static RelaxOrder parseRelaxOrder(std::string_view s);  ///< "random" | "cyclic" | "wildfire"
   static Sparsify parseSparsify(std::string_view s);      ///< "seif" | "eseif" | "conservative"
   static Covariance parseCovariance(std::string_view s);  ///< "exact" | "local" | "conservative"
   static Motion parseMotion(std::string_view s);          ///< "immediate" | "deferred"
