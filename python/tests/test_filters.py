@@ -166,6 +166,14 @@ def test_seif_options_and_config_fields():
         seif.make_filter("seif", np.zeros(3), config, options)
     options.omega = 1.95
     assert seif.make_filter("seif", np.zeros(3), config, options).options.omega == 1.95
+    # The wildfire order's threshold must be positive (conditional standard deviations).
+    options.relax_order = "wildfire"
+    assert options.relax_order == seif.SeifOptions.RelaxOrder.Wildfire
+    options.wildfire = 0.0
+    with pytest.raises(seif.InvalidArgument, match="wildfire must be in"):
+        seif.make_filter("seif", np.zeros(3), config, options)
+    options.wildfire = 0.05
+    assert seif.make_filter("seif", np.zeros(3), config, options).options.wildfire == 0.05
 
 
 def test_the_option_table_names_every_option_once():
