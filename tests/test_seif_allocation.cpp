@@ -202,6 +202,20 @@ TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsWithTheCoarseLevel) {
   expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
 }
 
+TEST(SeifAllocation, NoHeapAllocationInSteadyStateStepsInTheWildfireOrder) {
+  // RelaxOrder::Wildfire's queue and journal grow to their largest and are reused: the
+  // consumed front is erased in place between steps.
+  seif::SeifOptions options;
+  options.relax_order = seif::SeifOptions::RelaxOrder::Wildfire;
+  options.wildfire = 0.01;
+  expectNoHeapAllocationInSteadyStateSteps(options);
+  options.coarse = seif::SeifOptions::Coarse::Rigid;
+  options.omega = 1.95;
+  options.active = 12;
+  options.gauge = seif::SeifOptions::Gauge::Kept;
+  expectNoHeapAllocationInSteadyStateSteps(options, seif::Linearization::Invariant, 2, 700);
+}
+
 // Every marginal of a state comes from one factorisation: the first read factors H and
 // computes the selected inverse's columns it needs, later reads compute the rest of their
 // paths, and no read builds an N-row matrix (the landed getter solved with a dense

@@ -46,7 +46,7 @@ int slotOf(int id) { return id >= 10 && id <= 12 ? id - 10 : -1; }
 
 TEST(RelaxFrontier, AMoveBeyondTheThresholdQueuesTheNeighboursOnce) {
   SeifStore store = chain();
-  RelaxFrontier frontier(0.5);  // half a conditional sigma: 0.25 m here
+  RelaxFrontier frontier(0.5, 10, 4);  // half a conditional sigma: 0.25 m here
   for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.node(s).mu);
   store.setMean(meanWith(store, 1, Vec2(1.2, 0.0)));  // 0.2 m: 0.4 sigma
   frontier.moved(store, 1);
@@ -71,7 +71,7 @@ TEST(RelaxFrontier, AMoveBeyondTheThresholdQueuesTheNeighboursOnce) {
 
 TEST(RelaxFrontier, ARemovedLandmarkIsSkippedAndTheMovedSlotKeepsItsState) {
   SeifStore store = chain();
-  RelaxFrontier frontier(0.1);
+  RelaxFrontier frontier(0.1, 10, 4);
   for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.node(s).mu);
   store.setMean(meanWith(store, 1, Vec2(1.0, 1.0)));
   frontier.moved(store, 1);  // queues 10 and 12
@@ -90,7 +90,7 @@ TEST(RelaxFrontier, ARemovedLandmarkIsSkippedAndTheMovedSlotKeepsItsState) {
 
 TEST(RelaxFrontier, RollbackRestoresTheQueueAndTheSpreadPoints) {
   SeifStore store = chain();
-  RelaxFrontier frontier(0.1);
+  RelaxFrontier frontier(0.1, 10, 4);
   for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.node(s).mu);
   store.setMean(meanWith(store, 0, Vec2(0.0, 1.0)));
   frontier.moved(store, 0);  // queues 11

@@ -3,11 +3,26 @@
 
 #include "filters/seif_store.hpp"
 
+
 namespace seif {
+
+namespace {
+// Grows v's capacity to at least n, geometrically (a map grows one landmark at a time).
+template <class V>
+void reserveAtLeast(V& v, std::size_t n) {
+  if (v.capacity() < n) v.reserve(std::max(n, 2 * v.capacity()));
+}
+}  // namespace
 
 void RelaxFrontier::addLandmark(const Vec2& mu) {
   spread_from_.push_back(mu);
   is_queued_.push_back(0);
+  // No allocation in a step that adds no landmark: between steps the queue holds at most
+  // twice its live entries (begin()), and a step queues each landmark at most once; a step's
+  // journal saves a slot per pop, per spread and per newly queued neighbour.
+  const std::size_t n = spread_from_.size();
+  reserveAtLeast(queue_, 3 * n + 16);
+  reserveAtLeast(changes_, n + 4 * (std::min(relax_, n) + active_) + 16);
 }
 
 void RelaxFrontier::removeSlot(int slot) {

@@ -11,6 +11,7 @@
 // O(links) per landmark that spreads; a step's changes are undone by rollback().
 #include <seif/core/types.hpp>
 
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -20,8 +21,12 @@ class SeifStore;
 
 class RelaxFrontier {
  public:
-  /// What a landmark's mean must move, in its conditional standard deviations, to spread.
-  explicit RelaxFrontier(double threshold) : threshold_(threshold) {}
+  /// What a landmark's mean must move, in its conditional standard deviations, to spread;
+  /// `relax` (K) and `active` size the journal: a step relaxes at most min(K, map size)
+  /// landmarks besides the active ones, in at most two passes.
+  RelaxFrontier(double threshold, int relax, int active)
+      : threshold_(threshold), relax_(static_cast<std::size_t>(std::max(relax, 0))),
+        active_(static_cast<std::size_t>(std::max(active, 0))) {}
 
   /// A new landmark, slot size(), its neighbours' queue entry not yet spread from mu.
   void addLandmark(const Vec2& mu);
@@ -67,6 +72,7 @@ class RelaxFrontier {
   void save(int slot);
 
   double threshold_;
+  std::size_t relax_, active_;
   std::vector<int> queue_;  // landmark ids; [head_, end) are queued
   std::size_t head_ = 0;
   std::vector<Vec2> spread_from_;

@@ -21,7 +21,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
       options_(options),
       store_(config.initial_pose_sigma.cwiseAbs2().cwiseInverse().asDiagonal(), initial_pose),
       rng_(options.seed),
-      frontier_(options.wildfire) {
+      frontier_(options.wildfire, options.relax, kMaxLocalLandmarks) {
   if (options.active < 1 || options.active >= kMaxLocalLandmarks) {
     throw InvalidArgument("seif: the number of active landmarks must be in 1.." +
                                 std::to_string(kMaxLocalLandmarks - 1));
