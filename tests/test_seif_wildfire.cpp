@@ -69,6 +69,18 @@ TEST(RelaxFrontier, AMoveBeyondTheThresholdQueuesTheNeighboursOnce) {
   EXPECT_EQ(frontier.queued(), 2u);
 }
 
+TEST(RelaxFrontier, ASpreadQueuesTheNeighboursWhateverTheMove) {
+  SeifStore store = chain();
+  RelaxFrontier frontier(0.5, 10, 4);
+  for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.node(s).mu);
+  frontier.moved(store, 1);  // it has not moved
+  EXPECT_EQ(frontier.queued(), 0u);
+  frontier.spread(store, 1);
+  EXPECT_EQ(frontier.queued(), 2u);
+  EXPECT_EQ(frontier.next(slotOf), 0);
+  EXPECT_EQ(frontier.next(slotOf), 2);
+}
+
 TEST(RelaxFrontier, ARemovedLandmarkIsSkippedAndTheMovedSlotKeepsItsState) {
   SeifStore store = chain();
   RelaxFrontier frontier(0.1, 10, 4);
@@ -164,6 +176,31 @@ TEST(Wildfire, ACheckpointAfterARemovalResumesBitExactly) {
     twin->step(s.steps[k].u, s.steps[k].observations);
   }
   EXPECT_EQ(resumed->mean(), twin->mean());
+}
+
+TEST(Wildfire, AMergedLandmarksNeighboursAreQueued) {
+  // A merge gives the kept landmark drop's neighbours and a new mean: every neighbour is
+  // queued at once, even where no mean moved past the threshold (99 sigmas: none does here).
+  const seif::test::Scenario s = seif::test::makeScenario(9, 30, 60);
+  seif::SeifOptions o;
+  o.relax_order = seif::SeifOptions::RelaxOrder::Wildfire;
+  o.wildfire = 99.0;
+  seif::SeifSlam seif(s.start, seif::test::configFor(s), o);
+  for (const seif::Step& step : s.steps) seif.step(step.u, step.observations);
+  const std::vector<int> ids = seif.landmarkIds();
+  ASSERT_GE(ids.size(), 2u);
+  ASSERT_EQ(seif.wildfireQueued(), 0u) << "a move spread: the threshold is too low for this test";
+  seif.mergeLandmarks(ids[0], ids[1]);
+  const SeifStore& store = seif.store();
+  const int kept = [&] {
+    for (int slot = 0; slot < store.size(); ++slot) {
+      if (store.ids()[static_cast<std::size_t>(slot)] == ids[0]) return slot;
+    }
+    return -1;
+  }();
+  ASSERT_GE(kept, 0);
+  EXPECT_GT(store.node(kept).links.size(), 0u);
+  EXPECT_EQ(seif.wildfireQueued(), store.node(kept).links.size());
 }
 
 TEST(Wildfire, TheThresholdIsChecked) {

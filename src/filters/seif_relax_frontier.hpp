@@ -34,6 +34,9 @@ class RelaxFrontier {
   void removeSlot(int slot);
   /// After landmark `slot`'s mean changed: spreads when it moved past the threshold.
   void moved(const SeifStore& store, int slot);
+  /// Queues the neighbours of `slot` whatever its move (after a merge, which gives it new
+  /// neighbours and a new mean), and it spreads from its mean now.
+  void spread(const SeifStore& store, int slot);
   /// The next queued landmark that is still in the map (slot_of(id) >= 0), or -1 when none is.
   template <class SlotOf>
   int next(const SlotOf& slot_of) {

@@ -408,6 +408,8 @@ void SeifSlam::mergeLandmarks(int keep, int drop) {
     recoverExactMean();
   } else {
     store_.relaxLandmark(kept, 1.0);  // the merged landmark, once: eq. (42) itself
+    // Its neighbours, drop's among them, see a new landmark there: theirs go first.
+    if (wildfire()) frontier_.spread(store_, kept);
   }
   deactivateSurplus(false);
 }
