@@ -316,6 +316,35 @@ TEST(CheckpointDamage, ForgedChecksumNeverCrashes) {
   }
 }
 
+TEST(CheckpointDamage, AnOptionOutOfItsRangeIsRefusedNamingTheFile) {
+  // The options a checkpoint stores are checked where the filter checks them (its
+  // constructor); a stored value it would refuse is a DataError naming the file, not a
+  // filter built on it. Each value is replaced where the file stores it (tag 3, a double).
+  const std::string bytes = checkpointOf("seif:profile=consistent,omega=1.75,wildfire=0.0625,rho=0.03125", 12, 20);
+  ASSERT_NO_THROW((void)loadFromBytes(bytes, "whole"));
+  auto stored = [](double v) {
+    std::string field(1, '\x03');
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    for (int i = 0; i < 8; ++i) field += static_cast<char>((bits >> (8 * i)) & 0xFF);
+    return field;
+  };
+  const struct {
+    double value, bad;
+    const char* message;
+  } cases[] = {{1.75, 2.5, "omega must be in (0, 2)"},
+               {0.0625, 0.0, "wildfire must be in (0, 100)"},
+               {0.03125, 1.0, "rho must be in [0, 1)"}};
+  for (const auto& c : cases) {
+    const std::size_t at = bytes.find(stored(c.value));
+    ASSERT_NE(at, std::string::npos) << c.message;
+    ASSERT_EQ(bytes.find(stored(c.value), at + 1), std::string::npos) << "stored twice: " << c.message;
+    std::string damaged = bytes;
+    damaged.replace(at, 9, stored(c.bad));
+    EXPECT_NE(expectDataError(resealed(damaged)).find(c.message), std::string::npos) << c.message;
+  }
+}
+
 TEST(CheckpointDamage, ForeignFiles) {
   const std::string bytes = checkpointOf("ekf", 6, 5);
   EXPECT_NE(expectDataError("").find("empty"), std::string::npos);

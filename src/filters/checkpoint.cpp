@@ -101,29 +101,17 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   o.sparsify = static_cast<SeifOptions::Sparsify>(in.u64Max("sparsify", in.version() >= 6 ? 2 : 1));
   o.covariance = static_cast<SeifOptions::Covariance>(in.u64Max("covariance", in.version() >= 4 ? 2 : 1));
   o.beta = static_cast<int>(in.i64In("beta", 2, kIntMax));
-  if (in.version() >= 2) {
-    o.reanchor = in.f64("reanchor");
-    if (!(o.reanchor >= 0.0) || !std::isfinite(o.reanchor)) in.fail("reanchor must be finite and >= 0");
-  }
+  if (in.version() >= 2) o.reanchor = in.f64("reanchor");
   // Version 2 had no bound: its local marginals used the whole Markov blanket.
   o.blanket = in.version() >= 3 ? static_cast<int>(in.i64In("blanket", 0, kIntMax)) : 0;
   o.bounds = in.version() >= 4 && in.u64Max("bounds", 1) == 1;  // earlier files kept none
   if (in.version() >= 5) o.motion = static_cast<SeifOptions::Motion>(in.u64Max("motion", 1));
-  if (in.version() >= 6) {
-    o.rho = in.f64("rho");
-    if (!(o.rho >= 0.0 && o.rho < 1.0)) in.fail("rho must be in [0, 1)");
-  }
+  if (in.version() >= 6) o.rho = in.f64("rho");
   if (in.version() >= 7) o.gauge = static_cast<SeifOptions::Gauge>(in.u64Max("gauge", 1));
   if (in.version() >= 8) o.coarse = static_cast<SeifOptions::Coarse>(in.u64Max("coarse", 1));
   if (in.version() >= 11) o.stale = in.i64In("stale", 0, kIntMax);  // earlier files: off (the spec's range)
-  if (in.version() >= 12) {  // earlier files: eq. (42) as published
-    o.omega = in.f64("omega");
-    if (!(o.omega > 0.0 && o.omega < 2.0)) in.fail("omega must be in (0, 2)");
-  }
-  if (in.version() >= 13) {
-    o.wildfire = in.f64("wildfire");
-    if (!(o.wildfire > 0.0 && o.wildfire < 100.0)) in.fail("wildfire must be in (0, 100)");
-  }
+  if (in.version() >= 12) o.omega = in.f64("omega");  // earlier files: eq. (42) as published
+  if (in.version() >= 13) o.wildfire = in.f64("wildfire");
   return o;
 }
 
