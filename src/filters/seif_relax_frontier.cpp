@@ -3,7 +3,6 @@
 
 #include "filters/seif_store.hpp"
 
-
 namespace seif {
 
 namespace {
