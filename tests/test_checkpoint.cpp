@@ -332,9 +332,9 @@ TEST(CheckpointDamage, AnOptionOutOfItsRangeIsRefusedNamingTheFile) {
   const struct {
     double value, bad;
     const char* message;
-  } cases[] = {{1.75, 2.5, "omega must be in (0, 2)"},
-               {0.0625, 0.0, "wildfire must be in (0, 100)"},
-               {0.03125, 1.0, "rho must be in [0, 1)"}};
+  } cases[] = {{1.75, 2.5, "seif: omega=2.5 is outside (0, 2)"},
+               {0.0625, 0.0, "seif: wildfire=0 is outside (0, 100)"},
+               {0.03125, 1.0, "seif: rho=1 is not a fraction in [0, 1)"}};
   for (const auto& c : cases) {
     const std::size_t at = bytes.find(stored(c.value));
     ASSERT_NE(at, std::string::npos) << c.message;

@@ -4,12 +4,15 @@
 #include "cli_support.hpp"
 
 #include <seif/core/errors.hpp>
+#include <seif/association/association.hpp>
 #include <seif/filters/factory.hpp>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <charconv>
+#include <functional>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -133,6 +136,57 @@ TEST(FilterOptions, BadValuesAndForeignKeysAreRefusedByName) {
   } catch (const seif::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("it takes linearization"), std::string::npos) << e.what();
   }
+}
+
+// A filter or an associator built in code is held to the ranges a spec or a flag is: each
+// range is written once, in its table, and the constructors check through it, in its words.
+TEST(FilterOptions, OptionsSetInCodeAreHeldToTheTablesRangesInTheParsersWords) {
+  const auto refusal = [](auto&& make) -> std::string {
+    try {
+      make();
+    } catch (const seif::InvalidArgument& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const auto parserSays = [&](const std::string& spec) {
+    return refusal([&] { seif::parseFilterSpec(spec); });
+  };
+  const seif::FilterConfig config = seif::paperFilterConfig(seif::NoiseModel{});
+  struct Case {
+    std::string spec;  // the same value as a spec
+    std::function<void(FilterSpec&)> set;
+    std::string words;  // what both say
+  };
+  const std::vector<Case> cases = {
+      {"seif:beta=40", [](FilterSpec& s) { s.seif.beta = 40; }, "seif: beta=40 is outside [2, 39]"},
+      {"seif:blanket=-1", [](FilterSpec& s) { s.seif.blanket = -1; }, "seif: blanket=-1 is outside [0, 2147483647]"},
+      {"seif:reanchor=inf", [](FilterSpec& s) { s.seif.reanchor = std::numeric_limits<double>::infinity(); },
+       "seif: reanchor=inf is not a finite length >= 0"},
+      {"seif:omega=2", [](FilterSpec& s) { s.seif.omega = 2.0; }, "seif: omega=2 is outside (0, 2)"},
+      {"ekf:iterations=0", [](FilterSpec& s) { s.iterations = 0; }, "ekf: iterations=0 is outside [1, 20]"},
+      {"eif:iterations=21", [](FilterSpec& s) { s.iterations = 21; }, "eif: iterations=21 is outside [1, 20]"},
+  };
+  for (const Case& c : cases) {
+    FilterSpec spec = seif::parseFilterSpec(c.spec.substr(0, c.spec.find(':')));
+    c.set(spec);
+    const std::string built = refusal([&] { seif::makeFilter(spec, seif::Pose2::Zero(), config); });
+    EXPECT_NE(built.find(c.words), std::string::npos) << c.spec << ": " << built;
+    // The parser's message for the same value holds the same words after the filter's name.
+    EXPECT_NE(parserSays(c.spec).find(c.words.substr(c.words.find(": ") + 2)), std::string::npos) << parserSays(c.spec);
+  }
+  // The association options likewise (their flags' table).
+  seif::AssociationOptions a;
+  a.slack = std::numeric_limits<double>::infinity();
+  EXPECT_NE(refusal([&] { seif::Associator{a}; }).find("association: slack=inf is not a finite length >= 0"),
+            std::string::npos);
+  a = {};
+  a.jcbb_nodes = 0;
+  EXPECT_NE(refusal([&] { seif::Associator{a}; }).find("association: jcbb-nodes=0 is outside [1, "), std::string::npos);
+  a = {};
+  a.accept = 0.0;  // in its table's range, but a gate of zero width: the associator's own rule
+  EXPECT_NE(refusal([&] { seif::Associator{a}; }).find("gates need 0 < accept"), std::string::npos);
+  EXPECT_EQ(refusal([] { seif::Associator{seif::AssociationOptions{}}; }), "accepted");
 }
 
 TEST(FilterOptions, EveryOptionIsACliFlagWithTheLibraryDefault) {

@@ -199,19 +199,7 @@ void FilterFlags::add(CLI::App& cmd, bool batch) {
       case FilterOption::Kind::Seed: flag->transform(seedValue()); break;
       case FilterOption::Kind::Profile: break;
       case FilterOption::Kind::Length:
-        flag->check([](const std::string& v) -> std::string {
-          double d = 0.0;
-          if (!CLI::detail::lexical_cast(v, d) || !std::isfinite(d) || d < 0.0) return "must be finite and >= 0, found " + v;
-          return {};
-        });
-        break;
       case FilterOption::Kind::Fraction:
-        flag->check([](const std::string& v) -> std::string {
-          double d = 0.0;
-          if (!CLI::detail::lexical_cast(v, d) || !(d >= 0.0 && d < 1.0)) return "must be in [0, 1), found " + v;
-          return {};
-        });
-        break;
       case FilterOption::Kind::Real:  // the table's own parser checks the range and words the error
         flag->check([set = o.set](const std::string& v) -> std::string {
           FilterSpec scratch;

@@ -162,7 +162,7 @@ def test_seif_options_and_config_fields():
     assert "Cartesian" in f.sensor_model
     # The amortised mean's over-relaxation must lie in (0, 2): the filter refuses it otherwise.
     options.omega = 2.0
-    with pytest.raises(seif.InvalidArgument, match="omega must be in"):
+    with pytest.raises(seif.InvalidArgument, match="omega=2 is outside"):
         seif.make_filter("seif", np.zeros(3), config, options)
     options.omega = 1.95
     assert seif.make_filter("seif", np.zeros(3), config, options).options.omega == 1.95
@@ -170,7 +170,7 @@ def test_seif_options_and_config_fields():
     options.relax_order = "wildfire"
     assert options.relax_order == seif.SeifOptions.RelaxOrder.Wildfire
     options.wildfire = 0.0
-    with pytest.raises(seif.InvalidArgument, match="wildfire must be in"):
+    with pytest.raises(seif.InvalidArgument, match="wildfire=0 is outside"):
         seif.make_filter("seif", np.zeros(3), config, options)
     options.wildfire = 0.05
     assert seif.make_filter("seif", np.zeros(3), config, options).options.wildfire == 0.05

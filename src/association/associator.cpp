@@ -4,6 +4,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/association/association.hpp>
 #include "association/scan.hpp"
+#include "filters/option_values.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -288,13 +289,10 @@ struct Associator::Impl {
 };
 
 Associator::Associator(const AssociationOptions& options) : impl_(std::make_unique<Impl>()) {
+  checkAssociationOptions(options);  // each range as its flag has it
   const AssociationOptions& o = options;
-  if (!(o.accept > 0.0 && o.accept < 1.0) || !(o.new_landmark >= o.accept && o.new_landmark < 1.0)) {
+  if (!(o.accept > 0.0) || o.new_landmark < o.accept) {  // each below 1: the table's range
     throw InvalidArgument("association: gates need 0 < accept <= new_landmark < 1 (chi-square probabilities)");
-  }
-  if (!(o.merge >= 0.0 && o.merge < 1.0)) throw InvalidArgument("association: merge needs 0 <= merge < 1 (0: never)");
-  if (o.confirm < 1 || o.window < 0 || o.refresh < 0 || !(o.slack >= 0.0) || o.jcbb_nodes < 1) {
-    throw InvalidArgument("association: confirm >= 1, window >= 0, refresh >= 0, slack >= 0 and jcbb_nodes >= 1");
   }
   impl_->options = options;
   const auto chi2 = [](double p) { return -2.0 * std::log1p(-p); };  // chi-square(2) quantile, closed form

@@ -14,7 +14,7 @@ namespace {
 
 using Opt = AssociationOption;
 using options::formatReal;
-using options::parseInteger;
+using options::parseIntegerOf;
 using options::parseReal;
 constexpr auto kChoice = Opt::Kind::Choice;
 constexpr auto kInteger = Opt::Kind::Integer;
@@ -49,11 +49,11 @@ const std::array<AssociationOption, 12> kOptions = {{
     {"confirm", "confirm", kInteger, "", 1, kIntMax, true,
      "a new landmark is provisional until seen this many times within --window scans; otherwise it is "
      "removed (1: keep every new landmark)",
-     [](AssociationOptions& o, std::string_view v) { o.confirm = static_cast<int>(parseInteger("confirm", v, 1, kIntMax)); },
+     [](AssociationOptions& o, std::string_view v) { o.confirm = static_cast<int>(parseIntegerOf(kOptions, "confirm", v)); },
      [](const AssociationOptions& o) { return std::to_string(o.confirm); }},
     {"window", "window", kInteger, "", 0, kIntMax, true,
      "scans (steps with observations) a provisional landmark has to be confirmed in",
-     [](AssociationOptions& o, std::string_view v) { o.window = static_cast<int>(parseInteger("window", v, 0, kIntMax)); },
+     [](AssociationOptions& o, std::string_view v) { o.window = static_cast<int>(parseIntegerOf(kOptions, "window", v)); },
      [](const AssociationOptions& o) { return std::to_string(o.window); }},
     {"provisional", "provisional", kChoice, "filter|held", 0, 0, true,
      "where a provisional landmark lives: filter (in the filter from its first sighting, removed exactly if "
@@ -69,13 +69,13 @@ const std::array<AssociationOption, 12> kOptions = {{
     {"jcbb-nodes", "jcbb_nodes", kInteger, "", 1, std::numeric_limits<std::int64_t>::max(), true,
      "most JCBB search nodes per scan; beyond, the best hypothesis found so far is used",
      [](AssociationOptions& o, std::string_view v) {
-       o.jcbb_nodes = static_cast<std::size_t>(parseInteger("jcbb-nodes", v, 1, std::numeric_limits<std::int64_t>::max()));
+       o.jcbb_nodes = static_cast<std::size_t>(parseIntegerOf(kOptions, "jcbb-nodes", v));
      },
      [](const AssociationOptions& o) { return std::to_string(o.jcbb_nodes); }},
     {"refresh", "refresh", kInteger, "", 0, kIntMax, true,
      "landmarks re-indexed per scan besides the observed ones (cyclically), so that the grid follows means "
      "that move",
-     [](AssociationOptions& o, std::string_view v) { o.refresh = static_cast<int>(parseInteger("refresh", v, 0, kIntMax)); },
+     [](AssociationOptions& o, std::string_view v) { o.refresh = static_cast<int>(parseIntegerOf(kOptions, "refresh", v)); },
      [](const AssociationOptions& o) { return std::to_string(o.refresh); }},
     {"slack", "slack", Opt::Kind::Length, "", 0, 0, true,
      "how far beyond the gate's radius the grid is queried, for means that moved since indexed [m] (0: the "
@@ -92,5 +92,9 @@ const std::array<AssociationOption, 12> kOptions = {{
 }  // namespace
 
 std::span<const AssociationOption> associationOptions() { return kOptions; }
+
+void checkAssociationOptions(const AssociationOptions& values) {
+  options::checkValues("association", kOptions, values, [](const AssociationOption&) { return true; });
+}
 
 }  // namespace seif

@@ -17,6 +17,10 @@ namespace seif {
 
 namespace {
 
+// An option's range is its constructor's (construct(): the option table's); here an int.
+constexpr std::int64_t kIntMin = std::numeric_limits<int>::min();
+constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
+
 void writeExtras(ArchiveWriter& out, const CheckpointExtras& extras) {
   out.section("extras");
   out.u64(extras.steps_consumed);
@@ -58,8 +62,7 @@ FilterConfig readConfig(ArchiveReader& in) {
   in.fixed("initial pose sigma", c.initial_pose_sigma);
   c.outlier_gate = in.f64("outlier gate");
   c.linearization = static_cast<Linearization>(in.u64Max("linearization", in.version() == 1 ? 1 : 3));
-  if (in.version() >= 2) c.iterations = static_cast<int>(in.u64Max("iterations", 20));
-  if (c.iterations < 1) in.fail("iterations must be >= 1");
+  if (in.version() >= 2) c.iterations = static_cast<int>(in.u64Max("iterations", kIntMax));
   return c;
 }
 
@@ -89,10 +92,9 @@ void writeSeifOptions(ArchiveWriter& out, const SeifOptions& o) {
 
 SeifOptions readSeifOptions(ArchiveReader& in) {
   in.section("seif-options");
-  constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
   SeifOptions o;
-  o.active = static_cast<int>(in.i64In("active", 1, kMaxLocalLandmarks - 1));
-  o.relax = static_cast<int>(in.i64In("relax", 0, kIntMax));
+  o.active = static_cast<int>(in.i64In("active", kIntMin, kIntMax));
+  o.relax = static_cast<int>(in.i64In("relax", kIntMin, kIntMax));
   o.mean = static_cast<SeifOptions::Mean>(in.u64Max("mean", 1));
   o.deactivate = static_cast<SeifOptions::Deactivate>(in.u64Max("deactivate", 1));
   o.recovery = static_cast<SeifOptions::Recovery>(in.u64Max("recovery", 1));
@@ -100,16 +102,16 @@ SeifOptions readSeifOptions(ArchiveReader& in) {
   o.seed = in.u64("seed");
   o.sparsify = static_cast<SeifOptions::Sparsify>(in.u64Max("sparsify", in.version() >= 6 ? 2 : 1));
   o.covariance = static_cast<SeifOptions::Covariance>(in.u64Max("covariance", in.version() >= 4 ? 2 : 1));
-  o.beta = static_cast<int>(in.i64In("beta", 2, kIntMax));
+  o.beta = static_cast<int>(in.i64In("beta", kIntMin, kIntMax));
   if (in.version() >= 2) o.reanchor = in.f64("reanchor");
   // Version 2 had no bound: its local marginals used the whole Markov blanket.
-  o.blanket = in.version() >= 3 ? static_cast<int>(in.i64In("blanket", 0, kIntMax)) : 0;
+  o.blanket = in.version() >= 3 ? static_cast<int>(in.i64In("blanket", kIntMin, kIntMax)) : 0;
   o.bounds = in.version() >= 4 && in.u64Max("bounds", 1) == 1;  // earlier files kept none
   if (in.version() >= 5) o.motion = static_cast<SeifOptions::Motion>(in.u64Max("motion", 1));
   if (in.version() >= 6) o.rho = in.f64("rho");
   if (in.version() >= 7) o.gauge = static_cast<SeifOptions::Gauge>(in.u64Max("gauge", 1));
   if (in.version() >= 8) o.coarse = static_cast<SeifOptions::Coarse>(in.u64Max("coarse", 1));
-  if (in.version() >= 11) o.stale = in.i64In("stale", 0, kIntMax);  // earlier files: off (the spec's range)
+  if (in.version() >= 11) o.stale = in.i64("stale");  // earlier files: off
   if (in.version() >= 12) o.omega = in.f64("omega");  // earlier files: eq. (42) as published
   if (in.version() >= 13) o.wildfire = in.f64("wildfire");
   return o;

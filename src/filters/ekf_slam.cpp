@@ -3,6 +3,7 @@
 #include "filters/ekf_slam.hpp"
 #include "filters/information_ops.hpp"
 #include "filters/invariant.hpp"
+#include "filters/option_values.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -12,6 +13,7 @@ namespace seif {
 
 EkfSlam::EkfSlam(const Pose2& initial_pose, const FilterConfig& config)
     : SlamFilter(config), config_(config), book_("ekf", initial_pose, config), mu_(initial_pose), sigma_(Mat3::Zero()) {
+  checkFilterOptions("ekf", config);  // each range as its spec and flag have it
   sigma_.diagonal() = config.initial_pose_sigma.cwiseAbs2();
 }
 

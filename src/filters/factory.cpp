@@ -23,9 +23,9 @@ namespace {
 
 using options::formatReal;
 using options::parseBool;
-using options::parseInteger;
+using options::parseBetweenOf;
+using options::parseIntegerOf;
 using options::parseLength;
-using options::parseBetween;
 using options::parseFraction;
 using options::parseSeed;
 
@@ -54,7 +54,7 @@ const std::array<FilterOption, 25> kOptions = {{
      [](const FilterSpec& s) { return std::string(linearizationName(s.linearization)); }},
     {"iterations", kAll, kInteger, "", 1, 20,
      "Gauss-Newton iterations of each measurement update (1: the EKF's single linearisation)",
-     [](FilterSpec& s, std::string_view v) { s.iterations = static_cast<int>(parseInteger("iterations", v, 1, 20)); },
+     [](FilterSpec& s, std::string_view v) { s.iterations = static_cast<int>(parseIntegerOf(kOptions, "iterations", v)); },
      [](const FilterSpec& s) { return std::to_string(s.iterations); }},
     {"sparsify", kSeif, kChoice, "seif|eseif|conservative", 0, 0,
      "how the robot's links are kept at `active`: the paper's conditioning (seif), the ESEIF's "
@@ -65,23 +65,23 @@ const std::array<FilterOption, 25> kOptions = {{
     {"active", kSeif, kInteger, "", 1, kMaxLocalLandmarks - 1,
      "theta_x: landmarks kept linked to the robot (the paper: 6)",
      [](FilterSpec& s, std::string_view v) {
-       s.seif.active = static_cast<int>(parseInteger("active", v, 1, kMaxLocalLandmarks - 1));
+       s.seif.active = static_cast<int>(parseIntegerOf(kOptions, "active", v));
      },
      [](const FilterSpec& s) { return std::to_string(s.seif.active); }},
     {"beta", kSeif, kInteger, "", 2, kMaxLocalLandmarks - 1,
      "ESEIF: landmarks whose observations relocalise the robot",
      [](FilterSpec& s, std::string_view v) {
-       s.seif.beta = static_cast<int>(parseInteger("beta", v, 2, kMaxLocalLandmarks - 1));
+       s.seif.beta = static_cast<int>(parseIntegerOf(kOptions, "beta", v));
      },
      [](const FilterSpec& s) { return std::to_string(s.seif.beta); }},
     {"relax", kSeif, kInteger, "", 0, kIntMax,
      "K: landmarks relaxed per step besides the robot and the active ones (capped at the map size)",
-     [](FilterSpec& s, std::string_view v) { s.seif.relax = static_cast<int>(parseInteger("relax", v, 0, kIntMax)); },
+     [](FilterSpec& s, std::string_view v) { s.seif.relax = static_cast<int>(parseIntegerOf(kOptions, "relax", v)); },
      [](const FilterSpec& s) { return std::to_string(s.seif.relax); }},
     {"omega", kSeif, Opt::Kind::Real, "", 0, 2,
      "over-relaxation of the K relaxed landmarks, in (0, 2): each moves omega times its Gauss-Seidel "
      "step (1: eq. 42; near 2 the mean follows a loop closure many times faster)",
-     [](FilterSpec& s, std::string_view v) { s.seif.omega = parseBetween("omega", v, 0.0, 2.0); },
+     [](FilterSpec& s, std::string_view v) { s.seif.omega = parseBetweenOf(kOptions, "omega", v); },
      [](const FilterSpec& s) { return formatReal(s.seif.omega); }},
     {"mean", kSeif, kChoice, "amortized|exact", 0, 0,
      "mean recovery: amortized (constant time) or exact (a sparse Cholesky solve each step)",
@@ -94,7 +94,7 @@ const std::array<FilterOption, 25> kOptions = {{
     {"stale", kSeif, kInteger, "", 0, kIntMax,
      "deactivate first the active landmarks not observed in the last N steps, the longest unobserved "
      "first (0: off)",
-     [](FilterSpec& s, std::string_view v) { s.seif.stale = parseInteger("stale", v, 0, kIntMax); },
+     [](FilterSpec& s, std::string_view v) { s.seif.stale = parseIntegerOf(kOptions, "stale", v); },
      [](const FilterSpec& s) { return std::to_string(s.seif.stale); }},
     {"recovery", kSeif, kChoice, "after-update|before-update", 0, 0,
      "relax the amortized mean before the measurement update (the book's order) or after it",
@@ -108,7 +108,7 @@ const std::array<FilterOption, 25> kOptions = {{
     {"wildfire", kSeif, Opt::Kind::Real, "", 0, 100,
      "relax-order=wildfire: the move of a landmark's mean, in its conditional standard deviations, "
      "that queues its neighbours for relaxation",
-     [](FilterSpec& s, std::string_view v) { s.seif.wildfire = parseBetween("wildfire", v, 0.0, 100.0); },
+     [](FilterSpec& s, std::string_view v) { s.seif.wildfire = parseBetweenOf(kOptions, "wildfire", v); },
      [](const FilterSpec& s) { return formatReal(s.seif.wildfire); }},
     {"covariance", kSeif, kChoice, "exact|local|conservative", 0, 0,
      "how poseCovariance() and landmarkCovariance() are recovered: exact (one sparse factorisation "
@@ -124,7 +124,7 @@ const std::array<FilterOption, 25> kOptions = {{
     {"blanket", kSeif, kInteger, "", 0, kIntMax,
      "local marginals (gates, covariance=local): at most this many variables besides the queried "
      "ones, the strongest-linked first (0: the whole Markov blanket, unbounded)",
-     [](FilterSpec& s, std::string_view v) { s.seif.blanket = static_cast<int>(parseInteger("blanket", v, 0, kIntMax)); },
+     [](FilterSpec& s, std::string_view v) { s.seif.blanket = static_cast<int>(parseIntegerOf(kOptions, "blanket", v)); },
      [](const FilterSpec& s) { return std::to_string(s.seif.blanket); }},
     {"reanchor", kSeif, Opt::Kind::Length, "", 0, 0,
      "linearization=invariant: re-anchor an observed landmark whose mean moved more than this [m]",
@@ -186,6 +186,17 @@ bool knownFilter(std::string_view name) {
 }  // namespace
 
 std::span<const FilterOption> filterOptions() { return kOptions; }
+
+void checkFilterOptions(std::string_view name, const FilterConfig& config, const SeifOptions* seif) {
+  FilterSpec spec;
+  spec.name = std::string(name);
+  spec.linearization = config.linearization;
+  spec.iterations = config.iterations;
+  if (seif != nullptr) spec.seif = *seif;
+  options::checkValues(name, kOptions, spec, [&spec](const FilterOption& o) {
+    return takesOption(spec.name, o) && o.kind != FilterOption::Kind::Profile;
+  });
+}
 
 bool takesOption(std::string_view name, const FilterOption& option) {
   switch (option.scope) {

@@ -2,6 +2,7 @@
 #include <seif/core/errors.hpp>
 #include "core/sparse_marginals.hpp"
 #include "filters/seif_slam.hpp"
+#include "filters/option_values.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -22,19 +23,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
       store_(config.initial_pose_sigma.cwiseAbs2().cwiseInverse().asDiagonal(), initial_pose),
       rng_(options.seed),
       frontier_(options.wildfire, options.relax, kMaxLocalLandmarks) {
-  if (options.active < 1 || options.active >= kMaxLocalLandmarks) {
-    throw InvalidArgument("seif: the number of active landmarks must be in 1.." +
-                                std::to_string(kMaxLocalLandmarks - 1));
-  }
-  if (options.relax < 0) throw InvalidArgument("seif: --relax must be >= 0");
-  if (options.stale < 0) throw InvalidArgument("seif: stale must be >= 0");
-  if (!(options.omega > 0.0 && options.omega < 2.0)) throw InvalidArgument("seif: omega must be in (0, 2)");
-  if (!(options.wildfire > 0.0 && options.wildfire < 100.0)) throw InvalidArgument("seif: wildfire must be in (0, 100)");
-  if (options.beta < 2) throw InvalidArgument("seif: eseif beta must be >= 2");
-  if (!(options.reanchor >= 0.0) || !std::isfinite(options.reanchor)) {
-    throw InvalidArgument("seif: reanchor must be finite and >= 0");
-  }
-  if (!(options.rho >= 0.0 && options.rho < 1.0)) throw InvalidArgument("seif: rho must be in [0, 1)");
+  checkFilterOptions("seif", config, &options);  // each range as its spec and flag have it
   if (options.rho > 0.0 && options.sparsify == SeifOptions::Sparsify::Eseif) {
     throw InvalidArgument("seif: rho scales the paper's sparsification; sparsify=eseif conditions nothing away");
   }
