@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <utility>
 
 namespace seif::test {
 
@@ -18,15 +19,28 @@ struct CliResult {
   double seconds = 0.0;  // wall time
 };
 
-/// A fresh scratch folder under the system temp dir.
-inline std::filesystem::path scratchDir(const std::string& name) {
-  std::random_device rd;
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("seif-test-" + name + "-" + std::to_string(rd()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
+/// A fresh scratch folder under the system temp dir, removed with everything in it when the
+/// object goes out of scope (keep it as `const auto dir = scratchDir(...)`, or return it:
+/// a copy into a plain path would outlive the folder).
+class ScratchDir : public std::filesystem::path {
+ public:
+  explicit ScratchDir(const std::string& name)
+      : std::filesystem::path(std::filesystem::temp_directory_path() /
+                              ("seif-test-" + name + "-" + std::to_string(std::random_device{}()))) {
+    std::filesystem::remove_all(*this);
+    std::filesystem::create_directories(*this);
+  }
+  ScratchDir(ScratchDir&& other) noexcept : std::filesystem::path(std::move(other)) { other.clear(); }
+  ~ScratchDir() {
+    std::error_code ignored;
+    if (!empty()) std::filesystem::remove_all(*this, ignored);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  ScratchDir& operator=(ScratchDir&&) = delete;
+};
+
+inline ScratchDir scratchDir(const std::string& name) { return ScratchDir(name); }
 
 inline std::string slurp(const std::filesystem::path& file) {
   std::ifstream in(file);
@@ -50,7 +64,6 @@ inline CliResult runCli(const std::string& args, int timeout_seconds = 0) {
   r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
   r.out = slurp(dir / "out");
   r.err = slurp(dir / "err");
-  std::filesystem::remove_all(dir);
   return r;
 }
 

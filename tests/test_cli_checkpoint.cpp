@@ -30,7 +30,7 @@ nlohmann::json estimateMetrics(const fs::path& dir) {
 class CliCheckpoint : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(CliCheckpoint, AResumedRunEndsAsTheUninterruptedOne) {
-  const fs::path dir = scratchDir("checkpoint");
+  const auto dir = scratchDir("checkpoint");
   ASSERT_EQ(runCli("simulate --preset paper --seed 5 --out " + (dir / "data").string()).status, 0);
   const std::string run = "run --dataset " + (dir / "data").string() + " --filter '" + GetParam() + "'";
   ASSERT_EQ(runCli(run + " --out " + (dir / "full").string()).status, 0);
@@ -68,7 +68,7 @@ INSTANTIATE_TEST_SUITE_P(Filters, CliCheckpoint,
                          });
 
 TEST(CliCheckpoint, DamagedForeignAndMismatchedCheckpointsExit2WithOneLine) {
-  const fs::path dir = scratchDir("checkpoint-bad");
+  const auto dir = scratchDir("checkpoint-bad");
   ASSERT_EQ(runCli("simulate --preset paper --seed 5 --out " + (dir / "data").string()).status, 0);
   ASSERT_EQ(runCli("simulate --preset paper --seed 6 --out " + (dir / "other").string()).status, 0);
   const fs::path ckpt = dir / "c.ckpt";

@@ -24,8 +24,8 @@ const fs::path kMrclam = fs::path(SEIF_SHARED_DATA_DIR) / "mrclam" / "MRCLAM_Dat
 
 /// Copies robot 1 of dataset 6 and sets the range of one mid-run re-observation of a
 /// landmark to 1e6 m.
-fs::path robotOneWithAnOutlier() {
-  const fs::path dir = scratchDir("outlier");
+seif::test::ScratchDir robotOneWithAnOutlier() {
+  auto dir = scratchDir("outlier");  // returned: moved out
   for (const char* f : {"Barcodes.dat", "Landmark_Groundtruth.dat", "Robot1_Odometry.dat", "Robot1_Groundtruth.dat"}) {
     fs::copy_file(kMrclam / f, dir / f);
   }
@@ -67,7 +67,7 @@ fs::path robotOneWithAnOutlier() {
 
 TEST(CliOutliers, AGrossRangeOutlierOnMrclamIsRejectedAndCounted) {
   if (!fs::exists(kMrclam)) GTEST_SKIP() << "MRCLAM dataset 6 not found at " << kMrclam;
-  const fs::path data = robotOneWithAnOutlier();
+  const auto data = robotOneWithAnOutlier();
   for (const char* filter : {"ekf", "seif"}) {
     SCOPED_TRACE(filter);
     const fs::path out = data / (std::string("out-") + filter);

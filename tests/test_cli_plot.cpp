@@ -42,7 +42,7 @@ void copyUntil(const fs::path& from, const fs::path& to, double t_max) {
 
 TEST(PlotCli, DrawsARunFolderIntoMapPng) {
   if (!hasMatplotlib()) GTEST_SKIP() << "/usr/bin/python3 with matplotlib is needed";
-  const fs::path dir = scratchDir("plot");
+  const auto dir = scratchDir("plot");
   ASSERT_EQ(runCli("simulate --preset paper --landmarks 20 --steps 150 --seed 2 --out " + (dir / "W").string()).status, 0);
   ASSERT_EQ(runCli("run --dataset " + (dir / "W").string() + " --filter ekf --out " + (dir / "R").string()).status, 0);
   EXPECT_FALSE(fs::exists(dir / "R" / "gps.csv"));  // the simulator has no GPS
@@ -56,7 +56,7 @@ TEST(PlotCli, DrawsARunFolderIntoMapPng) {
 TEST(PlotCli, DrawsTheGpsFixesARunKept) {
   const fs::path vp = fs::path(SEIF_SHARED_DATA_DIR) / "victoria-park";
   if (!fs::exists(vp / "gps.txt")) GTEST_SKIP() << "Victoria Park not found at " << vp;
-  const fs::path dir = scratchDir("plot-gps");
+  const auto dir = scratchDir("plot-gps");
   fs::create_directories(dir / "VP");
   for (const char* f : {"controls.txt", "tree_observations_associated_UTS.txt", "gps.txt", "tree_detections.txt"}) {
     copyUntil(vp / f, dir / "VP" / f, 120.0);  // the first two minutes

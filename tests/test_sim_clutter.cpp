@@ -188,7 +188,7 @@ TEST(SimClutter, ReachesTheFilterAsObservationsOfNoLandmarkThroughEveryRoad) {
   expectTruth(data.steps, stats.clutter);
 
   // Through the MRCLAM layout: subject 0 in Barcodes.dat, read back as clutter.
-  const fs::path dir = test::scratchDir("clutter");
+  const auto dir = test::scratchDir("clutter");
   writeMrclam(dir, log);
   EXPECT_NE(test::slurp(dir / "Barcodes.dat").find("\n0\t100\n"), std::string::npos);
   const RobotLog back = readMrclam(dir);
@@ -238,7 +238,7 @@ TEST(SimClutter, LandmarkSubjectZeroIsStillRefused) {
   RobotLog log;
   log.odometry.push_back({0.0, 0.0, 0.0});
   log.landmarks[kClutterSubject] = Vec2(1.0, 2.0);
-  const fs::path dir = test::scratchDir("clutter-landmark");
+  const auto dir = test::scratchDir("clutter-landmark");
   EXPECT_THROW(writeMrclam(dir, log), DataError);
   MrclamFiles files;
   files.folder = "m";
@@ -260,7 +260,7 @@ TEST(SimClutter, LandmarkSubjectZeroIsStillRefused) {
 }
 
 TEST(SimClutter, TheCommandLineSimulatesItAndRunRefusesItNamingTheStep) {
-  const fs::path dir = test::scratchDir("cli-clutter");
+  const auto dir = test::scratchDir("cli-clutter");
   const auto sim = test::runCli("simulate --steps 100 --clutter 1 --detection-probability 0.9 --out " +
                                 (dir / "world").string());
   ASSERT_EQ(sim.status, 0) << sim.err;
@@ -281,7 +281,7 @@ TEST(SimClutter, TheCommandLineSimulatesItAndRunRefusesItNamingTheStep) {
 }
 
 TEST(CliDetections, RawDetectionsOfAnotherFormatAreAUsageError) {
-  const fs::path dir = test::scratchDir("cli-raw");
+  const auto dir = test::scratchDir("cli-raw");
   ASSERT_EQ(test::runCli("simulate --steps 20 --out " + (dir / "world").string()).status, 0);
   const auto r = test::runCli("run --dataset " + (dir / "world").string() + " --detections raw --out " +
                               (dir / "run").string());
@@ -295,7 +295,7 @@ TEST(CliDetections, RawDetectionsOfAnotherFormatAreAUsageError) {
 TEST(CliDetections, RawVictoriaParkReachesTheFilterWithoutLandmarkIds) {
   const std::string vp = std::string(SEIF_SHARED_DATA_DIR) + "/victoria-park";
   if (!fs::exists(vp + "/tree_detections.txt")) GTEST_SKIP() << "Victoria Park not found at " << vp;
-  const fs::path dir = test::scratchDir("cli-raw-vp");
+  const auto dir = test::scratchDir("cli-raw-vp");
   // Expected to fail until an associator exists: today's filters need landmark ids.
   const auto r = test::runCli("run --dataset " + vp + " --detections raw --out " + dir.string());
   EXPECT_EQ(r.status, 2);
