@@ -1,7 +1,7 @@
 // Result files are complete or absent: written under a temporary name and renamed.
 #include <seif/core/errors.hpp>
 #include "filters/ekf_slam.hpp"
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 #include <seif/io/results.hpp>
 
 #include <gtest/gtest.h>

@@ -5,7 +5,7 @@
 #include "options.hpp"
 
 #include <seif/eval/bench.hpp>
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 
 #include <cstdio>
 #include <filesystem>

@@ -3,7 +3,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/run_dataset.hpp>
 #include "filters/information_ops.hpp"
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 
 #include <sys/wait.h>
 #include <unistd.h>

@@ -1,7 +1,7 @@
 #include "binary_archive.hpp"
 
 #include <seif/core/errors.hpp>
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 
 #include <cstring>
 #include <limits>

@@ -4,7 +4,7 @@
 #include "eval/parallel.hpp"
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_loop.hpp>
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 #include <seif/io/event_source.hpp>
 #include <seif/io/mrclam.hpp>
 

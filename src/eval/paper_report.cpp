@@ -1,7 +1,7 @@
 // The paper study's outputs (include/seif/eval/paper.hpp): the console summary, results.json,
 // table.md and the figure data of scripts/figures/paper.py.
 #include <seif/eval/paper.hpp>
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 
 #include "json_fields.hpp"
 

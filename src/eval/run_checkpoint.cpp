@@ -1,6 +1,6 @@
 #include "run_checkpoint.hpp"
 
-#include "../core/binary_archive.hpp"
+#include "core/binary_archive.hpp"
 
 #include <seif/core/errors.hpp>
 #include <seif/filters/checkpoint.hpp>

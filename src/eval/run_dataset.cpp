@@ -5,7 +5,7 @@
 #include <seif/eval/run_dataset.hpp>
 #include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 #include <seif/io/results.hpp>
 
 #include "json_fields.hpp"

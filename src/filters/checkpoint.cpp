@@ -3,12 +3,11 @@
 // file (checkpoint_access.hpp).
 #include "checkpoint_access.hpp"
 
-#include "../models/model_io.hpp"
+#include "models/model_io.hpp"
 
 #include <seif/core/errors.hpp>
 #include <seif/filters/checkpoint.hpp>
-#include "io/atomic_file.hpp"
-#include "io/text_table.hpp"
+#include "core/files.hpp"
 
 #include <limits>
 #include <stdexcept>

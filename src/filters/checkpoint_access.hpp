@@ -6,7 +6,7 @@
 // A reader restores exactly what the writer wrote, in the same container order, and
 // checks that the result is consistent (sizes, slots, links), so that a corrupted file
 // whose checksum was forged still cannot make a later step read out of bounds.
-#include "../core/binary_archive.hpp"
+#include "core/binary_archive.hpp"
 
 #include "filters/eif_slam.hpp"
 #include "filters/ekf_slam.hpp"

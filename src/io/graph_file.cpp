@@ -1,6 +1,6 @@
 // Readers and writer of the iSAM and g2o pose-graph formats (include/seif/io/graph_file.hpp).
 #include <seif/core/errors.hpp>
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 #include <seif/io/graph_file.hpp>
 #include "io/text_table.hpp"
 #include <seif/models/cartesian.hpp>

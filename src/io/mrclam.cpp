@@ -2,7 +2,7 @@
 // ../shared/data/README.md). Files are read whole and parsed with std::from_chars: the
 // 62k-line odometry files of dataset 6 take a few milliseconds.
 #include <seif/core/errors.hpp>
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 #include <seif/io/mrclam.hpp>
 #include "io/text_table.hpp"
 

@@ -1,5 +1,5 @@
 #include <seif/core/errors.hpp>
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 #include <seif/io/results.hpp>
 
 #include <cmath>

@@ -10,6 +10,7 @@
 // A table reads either text held in memory (fuzzing, tests) or a file in chunks, so a
 // reader's memory does not grow with the file.
 #include <seif/core/errors.hpp>
+#include "core/files.hpp"
 
 #include <array>
 #include <cstddef>
@@ -91,14 +92,6 @@ class TimeOrder {
   double previous_ = -std::numeric_limits<double>::infinity();
   long previous_line_ = 0;
 };
-
-/// The text of `path`, or nullopt when it does not exist (a dangling link included).
-/// Throws DataError naming the file when it exists but cannot be read.
-std::optional<std::string> readFileIfExists(const std::filesystem::path& path);
-
-/// Whether `path` exists as a regular file (following links); a link loop or an
-/// unreadable entry is a DataError naming it.
-bool regularFileExists(const std::filesystem::path& path);
 
 /// Shortest decimal form that reads back bit-identical (std::to_chars).
 std::string formatDouble(double x);

@@ -1,7 +1,7 @@
 #include <seif/core/errors.hpp>
 #include "model_io.hpp"
 
-#include "../core/binary_archive.hpp"
+#include "core/binary_archive.hpp"
 
 #include <seif/models/ackermann_model.hpp>
 #include <seif/models/cartesian.hpp>

@@ -1,10 +1,14 @@
+// Files read and written whole (src/core/files.hpp).
 #include <seif/core/errors.hpp>
-#include "io/atomic_file.hpp"
+#include "core/files.hpp"
 
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
+#include <optional>
 #include <string>
 #include <system_error>
 
@@ -79,6 +83,36 @@ void requireWritableDirectory(const fs::path& dir) {
   if (!f) throw DataError(name, 0, "output folder is not writable: " + systemMessage(errno));
   std::fclose(f);
   fs::remove(probe, ec);
+}
+
+bool regularFileExists(const fs::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (status.type() == fs::file_type::not_found) return false;
+  if (ec == std::errc::too_many_symbolic_link_levels) {
+    throw DataError(name, 0, "symbolic-link loop: " + ec.message());
+  }
+  if (ec) throw DataError(name, 0, "cannot access file: " + ec.message());
+  if (!fs::is_regular_file(status)) throw DataError(name, 0, "not a regular file");
+  return true;
+}
+
+std::optional<std::string> readFileIfExists(const fs::path& path) {
+  if (!regularFileExists(path)) return std::nullopt;
+  const std::string name = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw DataError(name, 0, "cannot open file for reading");
+  std::string text;
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (!ec) text.reserve(static_cast<std::size_t>(size));
+  std::array<char, 1 << 16> chunk{};
+  while (in.read(chunk.data(), chunk.size()) || in.gcount() > 0) {
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.bad()) throw DataError(name, 0, "read error");
+  return text;
 }
 
 }  // namespace seif
