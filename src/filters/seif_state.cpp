@@ -149,7 +149,15 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
   const auto active = static_cast<std::size_t>(
       std::count_if(s.nodes_.begin(), s.nodes_.end(), [](const SeifStore::Node& n) { return n.active >= 0; }));
   if (active != robot_links) in.fail("active landmarks without a robot link");
-  s.step_ = static_cast<long>(in.i64("step"));
+  // Steps count up from 0; a robot link was last seen at one of them (the stale rule takes
+  // step - last_seen).
+  s.step_ = static_cast<long>(in.i64In("step", 0, std::numeric_limits<std::int64_t>::max() / 2));
+  for (const SeifStore::RobotLink& l : s.robot_links_) {
+    if (l.last_seen < 0 || l.last_seen > s.step_) {
+      in.fail("an active landmark last seen at step " + std::to_string(l.last_seen) + ", outside 0.." +
+              std::to_string(s.step_));
+    }
+  }
   s.blocks_touched_ = static_cast<std::size_t>(in.u64("blocks touched"));
   s.landmark_links_ = static_cast<std::size_t>(in.u64("landmark links"));
   if (2 * s.landmark_links_ != link_ends) in.fail("the landmark link count disagrees with the links stored");
