@@ -184,6 +184,10 @@ TEST(FilterOptions, OptionsSetInCodeAreHeldToTheTablesRangesInTheParsersWords) {
   a.jcbb_nodes = 0;
   EXPECT_NE(refusal([&] { seif::Associator{a}; }).find("association: jcbb-nodes=0 is outside [1, "), std::string::npos);
   a = {};
+  a.jcbb_nodes = std::numeric_limits<std::size_t>::max();  // beyond the table's int64 range: said so
+  EXPECT_NE(refusal([&] { seif::Associator{a}; }).find("jcbb-nodes=18446744073709551615 is outside [1, "),
+            std::string::npos);
+  a = {};
   a.accept = 0.0;  // in its table's range, but a gate of zero width: the associator's own rule
   EXPECT_NE(refusal([&] { seif::Associator{a}; }).find("gates need 0 < accept"), std::string::npos);
   EXPECT_EQ(refusal([] { seif::Associator{seif::AssociationOptions{}}; }), "accepted");

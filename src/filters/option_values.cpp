@@ -26,8 +26,12 @@ double finiteNumber(std::string_view key, std::string_view value) {
 std::int64_t parseInteger(std::string_view key, std::string_view value, std::int64_t lo, std::int64_t hi) {
   std::int64_t v = 0;
   const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
-  if (ec != std::errc() || end != value.data() + value.size()) bad(key, value, "is not an integer");
-  if (v < lo || v > hi) bad(key, value, "is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  std::string range = "[";  // built by appends: GCC 12's -Wrestrict misfires on "lit" + string&&
+  range.append(std::to_string(lo)).append(", ").append(std::to_string(hi)).append("]");
+  if (end != value.data() + value.size() || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+    bad(key, value, "is not an integer");
+  }
+  if (ec == std::errc::result_out_of_range || v < lo || v > hi) bad(key, value, "is outside " + range);
   return v;
 }
 

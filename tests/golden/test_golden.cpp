@@ -132,7 +132,7 @@ TEST(Golden, OutputsEqualThoseBeforeTheRefactor) {
       std::cout << "[golden] " << gc.name << " skipped: " << gc.needs << " not found\n";
       continue;
     }
-    const fs::path dir = scratchDir("golden-" + gc.name);
+    const auto dir = scratchDir("golden-" + gc.name);
     const auto r = runCli(gc.args + " --out " + dir.string(), 600);
     ASSERT_EQ(r.status, 0) << gc.name << ": " << r.err;
     const auto digests = digestFolder(dir);
