@@ -8,11 +8,11 @@
 #include <seif/eval/paper.hpp>
 #include <seif/filters/factory.hpp>
 #include "eval/parallel.hpp"
+#include "filters/option_values.hpp"
 
 #include <climits>
 #include <cstdint>
 #include <cstdio>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -104,12 +104,8 @@ void addPaperCommand(CLI::App& app) {
   cmd->add_option("--sweep-active", args->sweep_active,
                   "also run the constant-time SEIF with each theta_x listed, e.g. 4,6,10,20")
       ->delimiter(',')
-      ->transform([] {  // the range of seif:active, from its table entry
-        for (const FilterOption& o : filterOptions()) {
-          if (o.key == "active") return integerIn(o.min, o.max);
-        }
-        throw std::logic_error("no option 'active' in the filter table");
-      }());
+      ->transform(integerIn(options::entry(filterOptions(), "active").min,  // seif:active's range
+                            options::entry(filterOptions(), "active").max));
   cmd->add_option("--path", args->path,
                   "the robot's path: lawnmower (a survey of the square, 1.75 laps) or lissajous (a\n"
                   "3:2 Lissajous curve crossing itself, 1.6 laps); docs/simulator.md")

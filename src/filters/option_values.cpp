@@ -26,12 +26,13 @@ double finiteNumber(std::string_view key, std::string_view value) {
 std::int64_t parseInteger(std::string_view key, std::string_view value, std::int64_t lo, std::int64_t hi) {
   std::int64_t v = 0;
   const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
-  std::string range = "[";  // built by appends: GCC 12's -Wrestrict misfires on "lit" + string&&
-  range.append(std::to_string(lo)).append(", ").append(std::to_string(hi)).append("]");
   if (end != value.data() + value.size() || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
     bad(key, value, "is not an integer");
   }
-  if (ec == std::errc::result_out_of_range || v < lo || v > hi) bad(key, value, "is outside " + range);
+  if (ec == std::errc::result_out_of_range || v < lo || v > hi) {
+    std::string what = "is outside [";  // built by appends: GCC 12's -Wrestrict misfires on "lit" + string&&
+    bad(key, value, what.append(std::to_string(lo)).append(", ").append(std::to_string(hi)).append("]"));
+  }
   return v;
 }
 
