@@ -5,26 +5,26 @@
 #include <seif/eval/paper.hpp>
 #include <seif/eval/stats.hpp>
 
+#include "cli_support.hpp"
+
 #include <gtest/gtest.h>
-
-#include <unistd.h>
-
-#include <cstdint>
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
+
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <sys/wait.h>
 #include <vector>
 
 namespace {
 
 namespace fs = std::filesystem;
+using seif::test::runCli;
+using seif::test::scratchDir;
+using seif::test::slurp;
 
 // ---------------------------------------------------------------- statistics ----------
 
@@ -204,14 +204,12 @@ TEST(PaperStudy, RunPaperIsItsRunsWhateverTheThreadsAndWritesItsFiles) {
   EXPECT_EQ(one.typical_detail.filters.size(), 3u);
   EXPECT_NE(seif::paperSummaryText(one).find("SEIF (constant time)"), std::string::npos);
 
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("seif-test-paper-study-" + std::to_string(::getpid()));
+  const auto dir = scratchDir("paper-study");
   seif::writePaperResults(one, dir);
   for (const char* file : {"results.json", "table.md", "figure_data/ekf.json", "figure_data/seif.json",
                            "figure_data/seif_exact.json"}) {
     EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
   }
-  std::filesystem::remove_all(dir);
 
   request.runs = 0;
   EXPECT_THROW(seif::runPaper(request), seif::InvalidArgument);
@@ -252,33 +250,14 @@ TEST(PaperExperiment, SnapshotOrdersByIdAndListsLinks) {
 
 // ---------------------------------------------------------------- seif paper ----------
 
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-int runCli(const std::string& args, const fs::path& log) {
-  const std::string cmd = std::string(SEIF_CLI_PATH) + " " + args + " >" + log.string() + " 2>&1 </dev/null";
-  const int raw = std::system(cmd.c_str());
-  return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-}
-
-fs::path scratch(const std::string& name) {
-  std::random_device rd;
-  const fs::path dir = fs::temp_directory_path() / ("seif-test-paper-" + name + "-" + std::to_string(rd()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
 TEST(PaperCli, FourRunsEndToEnd) {
-  const fs::path dir = scratch("e2e");
+  const auto dir = scratchDir("paper-e2e");
   const fs::path out2 = dir / "jobs2", out1 = dir / "jobs1";
-  ASSERT_EQ(runCli("paper --runs 4 --jobs 2 --seed 11 --no-figures --out " + out2.string(), dir / "log2"), 0)
-      << slurp(dir / "log2");
-  ASSERT_EQ(runCli("paper --runs 4 --jobs 1 --seed 11 --no-figures --out " + out1.string(), dir / "log1"), 0)
-      << slurp(dir / "log1");
-  const std::string printed = slurp(dir / "log2");
+  const auto two = runCli("paper --runs 4 --jobs 2 --seed 11 --no-figures --out " + out2.string());
+  ASSERT_EQ(two.status, 0) << two.out << two.err;
+  const auto one = runCli("paper --runs 4 --jobs 1 --seed 11 --no-figures --out " + out1.string());
+  ASSERT_EQ(one.status, 0) << one.out << one.err;
+  const std::string& printed = two.out;
   EXPECT_NE(printed.find("final error"), std::string::npos) << printed;
   EXPECT_NE(printed.find("SEIF (constant time)"), std::string::npos) << printed;
   EXPECT_TRUE(fs::exists(out2 / "table.md"));
@@ -334,37 +313,32 @@ TEST(PaperCli, FourRunsEndToEnd) {
       EXPECT_LE(s["links"].get<double>(), 0.5 * n * (n + 1) / 2);
     }
   }
-  fs::remove_all(dir);
 }
 
 TEST(PaperCli, PathSelectsThePaperWorldsPath) {
-  const fs::path dir = scratch("path");
+  const auto dir = scratchDir("paper-path");
   const fs::path lawn = dir / "lawnmower", liss = dir / "lissajous";
-  ASSERT_EQ(runCli("paper --runs 1 --seed 3 --no-figures --out " + lawn.string(), dir / "log1"), 0)
-      << slurp(dir / "log1");
-  ASSERT_EQ(runCli("paper --runs 1 --seed 3 --path lissajous --no-figures --out " + liss.string(),
-                   dir / "log2"),
-            0)
-      << slurp(dir / "log2");
+  const auto first = runCli("paper --runs 1 --seed 3 --no-figures --out " + lawn.string());
+  ASSERT_EQ(first.status, 0) << first.out << first.err;
+  const auto second = runCli("paper --runs 1 --seed 3 --path lissajous --no-figures --out " + liss.string());
+  ASSERT_EQ(second.status, 0) << second.out << second.err;
   const auto a = nlohmann::json::parse(slurp(lawn / "results.json"));
   const auto b = nlohmann::json::parse(slurp(liss / "results.json"));
   EXPECT_EQ(a["setup"]["path"], "lawnmower");  // the default
   EXPECT_EQ(b["setup"]["path"], "lissajous");
-  EXPECT_NE(slurp(dir / "log2").find("lissajous path"), std::string::npos);
+  EXPECT_NE(second.out.find("lissajous path"), std::string::npos) << second.out;
   // Same seed, other path: other data, so other errors.
   EXPECT_NE(a["filters"][0]["error_mean"], b["filters"][0]["error_mean"]);
   // An unknown path is a usage error (exit 1) naming the valid ones.
-  EXPECT_EQ(runCli("paper --runs 1 --path spiral --no-figures --out " + (dir / "bad").string(), dir / "log3"), 1);
-  EXPECT_NE(slurp(dir / "log3").find("lissajous"), std::string::npos) << slurp(dir / "log3");
-  fs::remove_all(dir);
+  const auto bad = runCli("paper --runs 1 --path spiral --no-figures --out " + (dir / "bad").string());
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_NE(bad.err.find("lissajous"), std::string::npos) << bad.out << bad.err;
 }
 
 TEST(PaperCli, SweepAddsItsSection) {
-  const fs::path dir = scratch("sweep");
-  ASSERT_EQ(runCli("paper --runs 2 --jobs 2 --sweep-active 4,10 --no-figures --out " + dir.string(),
-                   dir / "log"),
-            0)
-      << slurp(dir / "log");
+  const auto dir = scratchDir("paper-sweep");
+  const auto run = runCli("paper --runs 2 --jobs 2 --sweep-active 4,10 --no-figures --out " + dir.string());
+  ASSERT_EQ(run.status, 0) << run.out << run.err;
   const auto r = nlohmann::json::parse(slurp(dir / "results.json"));
   ASSERT_EQ(r["sweep_active"].size(), 2u);
   EXPECT_EQ(r["sweep_active"][0]["active"], 4);
@@ -375,24 +349,21 @@ TEST(PaperCli, SweepAddsItsSection) {
     }
   }
   EXPECT_NE(slurp(dir / "table.md").find("theta_x"), std::string::npos);
-  EXPECT_NE(runCli("paper --runs 2 --sweep-active 0 --out " + (dir / "bad").string(), dir / "log"), 0);
-  fs::remove_all(dir);
+  EXPECT_NE(runCli("paper --runs 2 --sweep-active 0 --out " + (dir / "bad").string()).status, 0);
 }
 
 TEST(PaperCli, FiltersBeyondThePaperGetTheirTableWithNees) {
-  const fs::path dir = scratch("beyond");
-  ASSERT_EQ(runCli("paper --runs 2 --filters ekf:linearization=fej,seif:sparsify=eseif,beta=4 --no-figures --out " +
-                       dir.string(),
-                   dir / "log"),
-            0)
-      << slurp(dir / "log");
+  const auto dir = scratchDir("paper-beyond");
+  const auto run =
+      runCli("paper --runs 2 --filters ekf:linearization=fej,seif:sparsify=eseif,beta=4 --no-figures --out " +
+             dir.string());
+  ASSERT_EQ(run.status, 0) << run.out << run.err;
   const auto r = nlohmann::json::parse(slurp(dir / "results.json"));
   ASSERT_EQ(r["filters"].size(), 5u);  // the paper's three, then the two given
   EXPECT_EQ(r["filters"][4]["spec"], "seif:sparsify=eseif,beta=4");
   for (const auto& f : r["filters"]) EXPECT_GT(f["landmark_nees_mean"].get<double>(), 0.0) << f["name"];
   EXPECT_NE(slurp(dir / "table.md").find("| seif:sparsify=eseif,beta=4 |"), std::string::npos);
-  EXPECT_NE(runCli("paper --runs 2 --filters seif:beta --out " + (dir / "bad").string(), dir / "log"), 0);
-  fs::remove_all(dir);
+  EXPECT_NE(runCli("paper --runs 2 --filters seif:beta --out " + (dir / "bad").string()).status, 0);
 }
 
 }  // namespace
