@@ -1,5 +1,7 @@
 #pragma once
 // Runs the `seif` executable as a user would and captures what it prints.
+#include <nlohmann/json.hpp>
+
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -49,14 +51,21 @@ inline std::string slurp(const std::filesystem::path& file) {
   return ss.str();
 }
 
-/// Runs `seif <args>` (args are passed to the shell as written). With `timeout_seconds` > 0
-/// the run (and any process it forks) is stopped after that long and the status is 124.
-inline CliResult runCli(const std::string& args, int timeout_seconds = 0) {
+/// A run folder's metrics.json without what measures the machine (timings, the command line).
+inline nlohmann::json estimateMetrics(const std::filesystem::path& dir) {
+  nlohmann::json j = nlohmann::json::parse(slurp(dir / "metrics.json"));
+  for (const char* key : {"seconds", "seconds_wall", "seconds_trajectory_and_map", "us_per_step",
+                          "us_per_step_median", "command_line"}) {
+    j.erase(key);
+  }
+  return j;
+}
+
+/// Runs `prefix seif <args>` through the shell (args as written) and captures its output.
+inline CliResult runCliBehind(const std::string& prefix, const std::string& args) {
   const auto dir = scratchDir("cli");
-  const std::string limit =
-      timeout_seconds > 0 ? "timeout -k 5 " + std::to_string(timeout_seconds) + " " : std::string();
-  const std::string cmd = limit + std::string(SEIF_CLI_PATH) + " " + args + " >" +
-                          (dir / "out").string() + " 2>" + (dir / "err").string() + " </dev/null";
+  const std::string cmd = prefix + std::string(SEIF_CLI_PATH) + " " + args + " >" + (dir / "out").string() + " 2>" +
+                          (dir / "err").string() + " </dev/null";
   const auto start = std::chrono::steady_clock::now();
   const int raw = std::system(cmd.c_str());
   CliResult r;
@@ -65,6 +74,19 @@ inline CliResult runCli(const std::string& args, int timeout_seconds = 0) {
   r.out = slurp(dir / "out");
   r.err = slurp(dir / "err");
   return r;
+}
+
+/// Runs `seif <args>` (args are passed to the shell as written). With `timeout_seconds` > 0
+/// the run (and any process it forks) is stopped after that long and the status is 124.
+inline CliResult runCli(const std::string& args, int timeout_seconds = 0) {
+  return runCliBehind(
+      timeout_seconds > 0 ? "timeout -k 5 " + std::to_string(timeout_seconds) + " " : std::string(), args);
+}
+
+/// Runs `seif <args>` and sends it `signal` (a name: INT, TERM) after `seconds`; the status
+/// is the one seif exits with (a second signal after 30 s more kills it: status 137).
+inline CliResult runCliSignalled(const std::string& args, const std::string& signal, double seconds) {
+  return runCliBehind("timeout --preserve-status -k 30 -s " + signal + " " + std::to_string(seconds) + " ", args);
 }
 
 }  // namespace seif::test

@@ -13,19 +13,11 @@
 namespace fs = std::filesystem;
 using seif::test::runCli;
 using seif::test::scratchDir;
+using seif::test::estimateMetrics;
 using seif::test::slurp;
 
 namespace {
 
-/// metrics.json without what measures the machine (timings, the command line).
-nlohmann::json estimateMetrics(const fs::path& dir) {
-  nlohmann::json j = nlohmann::json::parse(slurp(dir / "metrics.json"));
-  for (const char* key : {"seconds", "seconds_wall", "seconds_trajectory_and_map", "us_per_step",
-                          "us_per_step_median", "command_line"}) {
-    j.erase(key);
-  }
-  return j;
-}
 
 class CliCheckpoint : public ::testing::TestWithParam<std::string> {};
 

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <stdexcept>
 #include <string>
@@ -45,7 +46,23 @@ class Recorder : public RunObserver {
     poses.push_back({step.time, f.pose()});
     seen.push_back(step);
   }
+  void onStop(const SlamFilter&, std::size_t consumed) override { calls.push_back("stop " + std::to_string(consumed)); }
   void onFinish(const SlamFilter&, double) override { calls.push_back("finish"); }
+  void onGroundTruth(const TimedPose& pose) override { last_groundtruth = pose.time; }
+  double last_groundtruth = -1.0;  // the stamp of the last ground-truth pose handed on
+};
+
+/// Asks the run to stop from inside it, after the update of step `at`.
+class StopAfter : public RunObserver {
+ public:
+  StopAfter(std::atomic<bool>& stop, std::size_t at) : stop_(stop), at_(at) {}
+  void afterUpdate(const SlamFilter&, const Step&, std::size_t k, double) override {
+    if (k == at_) stop_.store(true);
+  }
+
+ private:
+  std::atomic<bool>& stop_;
+  std::size_t at_;
 };
 
 struct World {
@@ -159,6 +176,58 @@ TEST(RunLoop, StartStepSkipsTheFirstStepsAndResumesWhereARunStopped) {
   EXPECT_EQ(none.calls, (std::vector<std::string>{"start", "finish"}));
 }
 
+TEST(RunLoop, AStopEndsTheRunBeforeItsNextStepAndStillFinishesIt) {
+  const World w(7);
+  const std::size_t n = w.data.steps.size(), k = n / 2;
+  auto whole = w.filter("seif");
+  Recorder all;
+  runLoop(*whole, w.data, {&all});
+  EXPECT_EQ(std::count_if(all.calls.begin(), all.calls.end(), [](const std::string& c) { return c.starts_with("stop"); }),
+            0);  // no stop asked: none reported
+  const std::vector<TimedPose> first_k(all.poses.begin(), all.poses.begin() + static_cast<std::ptrdiff_t>(k + 1));
+  const std::vector<std::string> ending = {"update " + std::to_string(k - 1), "stop " + std::to_string(k), "finish"};
+
+  // In memory: asked during step k - 1, the loop stops before step k.
+  std::atomic<bool> stop{false};
+  StopAfter stopper(stop, k - 1);
+  RunLoopOptions options;
+  options.stop = &stop;
+  auto stopped = w.filter("seif");
+  Recorder in_memory;
+  EXPECT_EQ(runLoop(*stopped, w.data, {&stopper, &in_memory}, options), k);
+  ASSERT_GE(in_memory.calls.size(), 3u);
+  EXPECT_EQ(std::vector<std::string>(in_memory.calls.end() - 3, in_memory.calls.end()), ending);
+  expectSamePoses(in_memory.poses, first_k);
+
+  // Streamed: the same, and nothing the stream carries after the last step run is handed on.
+  stop.store(false);
+  RobotLogSource source(w.log, w.data.noise.value_or(NoiseModel{}));
+  FilterConfig config;
+  config.motion = source.info().motion;
+  config.sensor = source.info().sensor;
+  auto streamed = makeFilter("seif", source.info().start_pose, config);
+  Recorder stream;
+  StepAssembler steps;
+  EXPECT_EQ(runLoop(*streamed, source, steps, {&stopper, &stream}, options), k);
+  EXPECT_EQ(std::vector<std::string>(stream.calls.end() - 3, stream.calls.end()), ending);
+  expectSamePoses(stream.poses, in_memory.poses);
+  EXPECT_GE(stream.last_groundtruth, w.data.steps[k - 2].time);
+  EXPECT_LE(stream.last_groundtruth, w.data.steps[k - 1].time);
+
+  // Asked before the run: it starts, stops at once and finishes, in memory and streamed.
+  for (const bool in_mem : {true, false}) {
+    stop.store(true);
+    auto untouched = w.filter("seif");
+    Recorder none;
+    RobotLogSource again(w.log, w.data.noise.value_or(NoiseModel{}));
+    StepAssembler fresh;
+    EXPECT_EQ(in_mem ? runLoop(*untouched, w.data, {&none}, options) : runLoop(*untouched, again, fresh, {&none}, options),
+              0u);
+    EXPECT_EQ(none.calls, (std::vector<std::string>{"start", "stop 0", "finish"})) << (in_mem ? "in memory" : "streamed");
+    EXPECT_EQ(untouched->landmarkIds().size(), 0u);
+  }
+}
+
 TEST(RunLoop, TheAssociationHookSeesThePredictionAndRewritesTheUpdatesObservations) {
   const World w(6);
   // Keeping the observations as they are changes nothing.
@@ -198,7 +267,7 @@ TEST(RunLoop, AFailureInsideAStepNamesTheFilterTheStepAndItsTime) {
   auto filter = w.filter("seif");
   RunLoopOptions options;
   options.associate = [](const SlamFilter&, const Step&, std::size_t k, std::vector<Observation>&) {
-    if (k == 3) throw std::runtime_error("no match");
+    if (k == 3) throw InvalidArgument("no match");
   };
   try {
     runLoop(*filter, w.data, {}, options);
@@ -208,6 +277,15 @@ TEST(RunLoop, AFailureInsideAStepNamesTheFilterTheStepAndItsTime) {
     EXPECT_EQ(what.rfind(filter->name() + ": step 3 (t = ", 0), 0u) << what;
     EXPECT_NE(what.find("): no match"), std::string::npos) << what;
   }
+  // A caller's own exception passes as it is (its type is the caller's to catch).
+  struct Mine : std::runtime_error {
+    using std::runtime_error::runtime_error;
+  };
+  options.associate = [](const SlamFilter&, const Step&, std::size_t k, std::vector<Observation>&) {
+    if (k == 3) throw Mine("mine");
+  };
+  auto again = w.filter("seif");
+  EXPECT_THROW(runLoop(*again, w.data, {}, options), Mine);
 }
 
 TEST(Parallel, RunsEveryTaskOnceAndRethrowsTheFirstFailure) {
@@ -225,6 +303,15 @@ TEST(Parallel, RunsEveryTaskOnceAndRethrowsTheFirstFailure) {
                  if (i == 4) throw std::runtime_error("task 4");
                }),
                std::runtime_error);
+  // A `done` that throws (a Python progress callback) is a failure like a task's, on any thread.
+  for (unsigned threads : {1u, 2u, 4u}) {
+    EXPECT_THROW(parallelFor(10, threads, [](std::size_t) {},
+                             [](std::size_t finished, std::size_t) {
+                               if (finished == 3) throw std::runtime_error("done 3");
+                             }),
+                 std::runtime_error)
+        << threads << " threads";
+  }
   EXPECT_EQ(threadCount(8, 3), 3u);
   EXPECT_EQ(threadCount(2, 0), 1u);
   EXPECT_GE(threadCount(0, 100), 1u);

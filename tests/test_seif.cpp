@@ -470,8 +470,7 @@ TEST(Seif, AStepThatFailsNumericallyLeavesTheFilterAsItWas) {
   // what a step changes and rolls it back. A failed step leaves the filter bit-identical to a
   // twin that never saw it, and both go on identically. The failures: a singular motion
   // Jacobian (G = I + J = 0, not invertible in information form) and, in an update, an
-  // observation whose noise is negative definite (it passes the input checks - finite -
-  // and adds negative information after the batch's first observations have entered).
+  // observation whose noise is negative definite (the input checks refuse it, ModelError).
   for (const char* spec : {"seif", "seif:sparsify=eseif,beta=2", "seif:relax-order=random,linearization=invariant,iterations=2",
                            "seif:mean=exact", "seif:motion=deferred", "seif:profile=consistent,motion=deferred",
                            "seif:coarse=rigid,linearization=invariant,iterations=2"}) {
@@ -494,7 +493,7 @@ TEST(Seif, AStepThatFailsNumericallyLeavesTheFilterAsItWas) {
     bad.push_back(poison);
     seif->predict(s.steps[half].u);
     twin->predict(s.steps[half].u);
-    EXPECT_THROW(seif->update(bad), seif::NumericError) << spec;
+    EXPECT_THROW(seif->update(bad), seif::ModelError) << spec;  // refused before any change
     EXPECT_EQ(seif->mean(), twin->mean()) << spec;
     const SeifStore& store = dynamic_cast<const SeifSlam&>(*seif).store();
     const SeifStore& twin_store = dynamic_cast<const SeifSlam&>(*twin).store();
@@ -572,3 +571,44 @@ TEST(Sparsification, StaleLandmarksAreDeactivatedFirst) {
   const test::Scenario s = test::makeScenario(1, 10, 10);
   EXPECT_THROW(SeifSlam(s.start, configFor(s), bad), InvalidArgument);
 }
+
+namespace seif {
+namespace {
+
+// A motion increment that is not finite, or whose process noise is not positive semidefinite,
+// and an observation whose noise is not positive definite are refused by every filter before
+// anything changes (a NaN never enters the estimate).
+TEST(FilterInputs, BadIncrementsAndNoiseAreRefusedBeforeAnythingChanges) {
+  const test::Scenario s = test::makeScenario(5, 30, 20);
+  const FilterConfig config = test::configFor(s);
+  for (const char* spec : {"ekf", "eif", "seif", "seif:profile=consistent", "batch"}) {
+    auto f = makeFilter(spec, s.start, config);
+    for (std::size_t k = 0; k < 10; ++k) f->step(s.steps[k].u, s.steps[k].observations);
+    const Eigen::VectorXd before = f->mean();
+    MotionIncrement nan;
+    nan.delta = Vec3(std::nan(""), 0.0, 0.0);
+    nan.U = 1e-4 * Mat3::Identity();
+    EXPECT_THROW(f->predict(nan), ModelError) << spec;
+    MotionIncrement negative;
+    negative.delta = Vec3(0.01, 0.0, 0.0);
+    negative.U = -1e-4 * Mat3::Identity();
+    EXPECT_THROW(f->predict(negative), ModelError) << spec;
+    MotionIncrement indefinite = negative;  // positive diagonal, a negative 2x2 minor
+    indefinite.U << 1e-4, 2e-4, 0, 2e-4, 1e-4, 0, 0, 0, 1e-4;
+    EXPECT_THROW(f->predict(indefinite), ModelError) << spec;
+    if (std::string(spec) != "batch") {  // the batch checks its measurements when it solves
+      std::vector<Observation> z = s.steps[10].observations;
+      ASSERT_FALSE(z.empty());
+      z.front().noise = -1e-4 * Mat2::Identity();
+      EXPECT_THROW(f->update(z), ModelError) << spec;
+    }
+    EXPECT_EQ(f->mean(), before) << spec;
+    MotionIncrement singular;  // a singular U is a valid one (noise-free directions)
+    singular.delta = Vec3(0.01, 0.0, 0.0);
+    singular.U = Vec3(1e-4, 1e-4, 0.0).asDiagonal();
+    EXPECT_NO_THROW(f->predict(singular)) << spec;
+  }
+}
+
+}  // namespace
+}  // namespace seif

@@ -5,7 +5,9 @@
 
 #include <seif/eval/run_dataset.hpp>
 
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 
 namespace seif::cli {
@@ -28,6 +30,37 @@ struct RunArgs {
   bool smooth = false;
   AssociationFlags association;
   std::string command_line;
+};
+
+// Ctrl-C (SIGINT) or SIGTERM during a run stops it after the step it is in, and the outputs so
+// far are written. The handler stays for more of them (`timeout` and process managers send
+// one to the process and one to its group); Ctrl-\ (SIGQUIT) still ends the process at once.
+std::atomic<bool> g_stop{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+extern "C" void requestStop(int) { g_stop.store(true, std::memory_order_relaxed); }
+
+/// Installs requestStop() for SIGINT and SIGTERM while it lives, and restores what was there.
+/// A signal the shell ignores (a background job's SIGINT, nohup) stays ignored.
+class StopOnSignals {
+ public:
+  using Handler = void (*)(int);
+  StopOnSignals() : int_(install(SIGINT)), term_(install(SIGTERM)) {}
+  ~StopOnSignals() {
+    std::signal(SIGINT, int_);
+    std::signal(SIGTERM, term_);
+  }
+  StopOnSignals(const StopOnSignals&) = delete;
+  StopOnSignals& operator=(const StopOnSignals&) = delete;
+
+ private:
+  static Handler install(int signal) {
+    const Handler before = std::signal(signal, requestStop);
+    if (before == SIG_IGN) std::signal(signal, SIG_IGN);
+    return before;
+  }
+  Handler int_;
+  Handler term_;
 };
 
 std::string metres(const std::optional<double>& v) {
@@ -61,12 +94,11 @@ void run(const RunArgs& args) {
   if (request.checkpoint_every > 0 && request.checkpoint.empty()) {
     throw InvalidArgument("--checkpoint-every needs --checkpoint FILE");
   }
-  if (!request.checkpoint.empty() && request.checkpoint_every == 0) {
-    throw InvalidArgument("--checkpoint FILE needs --checkpoint-every N");
-  }
   request.command_line = args.command_line;
+  request.stop = &g_stop;
   RunReport r;
   {
+    const StopOnSignals stop_on_signals;
     Progress progress("seif run " + args.filter);
     r = runDataset(request, args.out, [&](double f) { progress(f); });
   }
@@ -160,6 +192,14 @@ void run(const RunArgs& args) {
   }
   std::printf("  wrote %s/{trajectory.tum,dead_reckoning.tum,map.csv,metrics.json%s}\n", args.out.c_str(),
               r.filter_errors ? ",trajectory_filter.tum,map_filter.csv" : "");
+  if (out.interrupted) {
+    std::fflush(stdout);
+    std::string what = "run interrupted after " + std::to_string(out.steps) + " steps: the outputs above cover them";
+    if (!args.checkpoint.empty()) {
+      what += "; checkpoint saved: go on with --resume " + args.checkpoint + " (and the same --dataset)";
+    }
+    throw Interrupted(what);
+  }
 }
 
 }  // namespace
@@ -217,11 +257,14 @@ void addRunCommand(CLI::App& app) {
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
   cmd->add_option("--checkpoint-every", args->checkpoint_every,
-                  "save the filter and the run so far to --checkpoint after every N steps (0: never)")
+                  "save the filter and the run so far to --checkpoint after every N steps (0: only\n"
+                  "when the run is interrupted)")
       ->transform(integerIn(0, 1000000000))
       ->capture_default_str();
   cmd->add_option("--checkpoint", args->checkpoint,
-                  "the checkpoint file (binary, versioned; replaced atomically each time; docs/checkpoints.md)");
+                  "the checkpoint file (binary, versioned; replaced atomically each time; docs/checkpoints.md).\n"
+                  "Ctrl-C (or SIGTERM) stops a run after the step it is in, writes the outputs so far and,\n"
+                  "with --checkpoint, a checkpoint there to --resume from; exit status 130");
   cmd->add_option("--resume", args->resume,
                   "resume the run saved in this checkpoint (same --dataset): the filter is the\n"
                   "checkpoint's, the steps it consumed are skipped, and the outputs equal those of\n"

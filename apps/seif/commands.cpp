@@ -31,7 +31,8 @@ int main(int argc, char** argv) {
       "  seif consistency --preset paper --runs 50 --filters batch,ekf,seif --out out/nees\n"
       "  seif bench --filters ekf,seif --landmarks 100,1000 --out out/bench\n\n"
       "Datasets: MRCLAM, Victoria Park, iSAM and g2o (see README). Exit status: 0 success, 1 usage\n"
-      "error, 2 bad input data or a numerical failure (one line on stderr names the cause)."};
+      "error, 2 bad input data or a numerical failure (one line on stderr names the cause), 130\n"
+      "interrupted (Ctrl-C: `seif run` writes what it has run first)."};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("seif ") + kVersion);
   addSimulateCommand(app);
@@ -45,6 +46,9 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 1;
+  } catch (const Interrupted& e) {
+    std::fprintf(stderr, "seif: %s\n", e.what());
+    return 130;
   } catch (const DataError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 2;

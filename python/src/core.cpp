@@ -57,7 +57,7 @@ void bindCore(py::module_& m) {
            py::arg("landmark"), py::arg("z"), py::arg("noise") = py::none())
       .def_readwrite("landmark", &Observation::landmark)
       .def_readwrite("z", &Observation::z)
-      .def_readwrite("noise", &Observation::noise)
+      .def_readwrite("noise", &Observation::noise, py::return_value_policy::copy)
       .def_readwrite("truth", &Observation::truth,
                      "the id the data names for what was seen, to score an association only (UNKNOWN_LANDMARK: none)")
       .def("__repr__", [](py::handle s) { return reprOf(s, {"landmark", "z", "noise", "truth"}); });
@@ -146,7 +146,7 @@ void bindCore(py::module_& m) {
             return py::make_tuple(vw, J);
           },
           py::arg("u"), "(vc, w) of input u and d(vc, w)/d(speed, steering).")
-      .def_property_readonly("geometry", &AckermannModel::geometry)
+      .def_property_readonly("geometry", &AckermannModel::geometry, py::return_value_policy::copy)
       .def_property_readonly("sigma_speed", &AckermannModel::sigmaSpeed)
       .def_property_readonly("sigma_steering", &AckermannModel::sigmaSteering)
       .def_property_readonly("form", &AckermannModel::form);
@@ -181,9 +181,9 @@ void bindCore(py::module_& m) {
           py::arg("x"), py::arg("z"), "The landmark seen as z from pose x: (y, dy/dx (2x3), dy/dz (2x2)).")
       .def("residual", &MeasurementModel::residual, py::arg("z"), py::arg("zhat"),
            "z - zhat in measurement space (angles wrapped).")
-      .def_property_readonly("noise", py::overload_cast<>(&MeasurementModel::noise, py::const_),
+      .def_property_readonly("noise", py::overload_cast<>(&MeasurementModel::noise, py::const_), py::return_value_policy::copy,
                              "Default 2x2 measurement covariance.")
-      .def_property_readonly("mount", &MeasurementModel::mount, "Sensor pose in the vehicle frame.")
+      .def_property_readonly("mount", &MeasurementModel::mount, py::return_value_policy::copy, "Sensor pose in the vehicle frame.")
       .def("__repr__", [](const MeasurementModel& s) { return "<" + s.describe() + ">"; });
 
   py::class_<RangeBearingModel, MeasurementModel, std::shared_ptr<RangeBearingModel>>(
@@ -228,7 +228,7 @@ void bindCore(py::module_& m) {
       .def(py::init([](double t, const std::vector<Observation>& z) { return ObservationEvent{t, z}; }),
            py::arg("time"), py::arg("observations"))
       .def_readwrite("time", &ObservationEvent::time)
-      .def_readwrite("observations", &ObservationEvent::observations)
+      .def_readwrite("observations", &ObservationEvent::observations, py::return_value_policy::copy)
       .def("__repr__", [](py::handle s) { return reprOf(s, {"time", "observations"}); });
 
   py::class_<OdometryRecord>(m, "OdometryRecord", "MRCLAM odometry row: time [s], v [m/s], w [rad/s].")
@@ -263,11 +263,11 @@ void bindCore(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("source", &RobotLog::source)
       .def_readwrite("robot", &RobotLog::robot)
-      .def_readwrite("odometry", &RobotLog::odometry)
-      .def_readwrite("measurements", &RobotLog::measurements)
-      .def_readwrite("groundtruth", &RobotLog::groundtruth)
-      .def_readwrite("landmarks", &RobotLog::landmarks)
-      .def_readwrite("noise", &RobotLog::noise)
+      .def_readwrite("odometry", &RobotLog::odometry, py::return_value_policy::copy)
+      .def_readwrite("measurements", &RobotLog::measurements, py::return_value_policy::copy)
+      .def_readwrite("groundtruth", &RobotLog::groundtruth, py::return_value_policy::copy)
+      .def_readwrite("landmarks", &RobotLog::landmarks, py::return_value_policy::copy)
+      .def_readwrite("noise", &RobotLog::noise, py::return_value_policy::copy)
       .def_readwrite("dropped", &RobotLog::dropped);
 
   py::class_<Step>(m, "Step", "One filter cycle: predict with u (ending at `time`), then update with the observations.")
@@ -275,7 +275,7 @@ void bindCore(py::module_& m) {
            py::arg("time"), py::arg("u"), py::arg("observations") = std::vector<Observation>{})
       .def_readwrite("time", &Step::time)
       .def_readwrite("u", &Step::u)
-      .def_readwrite("observations", &Step::observations)
+      .def_readwrite("observations", &Step::observations, py::return_value_policy::copy)
       .def("__repr__", [](py::handle s) { return reprOf(s, {"time", "u", "observations"}); });
 
   py::class_<Dataset>(m, "Dataset",
@@ -284,10 +284,10 @@ void bindCore(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("source", &Dataset::source)
       .def_readwrite("start_time", &Dataset::start_time)
-      .def_readwrite("steps", &Dataset::steps)
-      .def_readwrite("groundtruth", &Dataset::groundtruth)
-      .def_readwrite("landmarks", &Dataset::landmarks)
-      .def_readwrite("noise", &Dataset::noise)
+      .def_readwrite("steps", &Dataset::steps, py::return_value_policy::copy)
+      .def_readwrite("groundtruth", &Dataset::groundtruth, py::return_value_policy::copy)
+      .def_readwrite("landmarks", &Dataset::landmarks, py::return_value_policy::copy)
+      .def_readwrite("noise", &Dataset::noise, py::return_value_policy::copy)
       .def_readwrite("dropped", &Dataset::dropped)
       .def("__len__", [](const Dataset& d) { return d.steps.size(); });
 

@@ -11,6 +11,8 @@
 #include <seif/eval/run_dataset.hpp>
 #include <seif/eval/stats.hpp>
 
+#include <atomic>
+#include <exception>
 #include <limits>
 #include <optional>
 
@@ -31,19 +33,21 @@ void bindRun(py::module_& m) {
                         "What a run produced (eval/run.hpp). List attributes are copied on access; "
                         "trajectory_array() etc. give numpy arrays.")
       .def_readonly("steps", &RunOutput::steps)
-      .def_readonly("trajectory", &RunOutput::trajectory, "start pose, then the pose after every step")
-      .def_readonly("filter_trajectory", &RunOutput::filter_trajectory,
+      .def_readonly("trajectory", &RunOutput::trajectory, py::return_value_policy::copy, "start pose, then the pose after every step")
+      .def_readonly("filter_trajectory", &RunOutput::filter_trajectory, py::return_value_policy::copy,
                     "a smoother's: the estimates while streaming, before finish() smoothed them")
       .def_readonly("step_seconds", &RunOutput::step_seconds)
-      .def_readonly("pose_covariances", &RunOutput::pose_covariances)
+      .def_readonly("pose_covariances", &RunOutput::pose_covariances, py::return_value_policy::copy)
       .def_readonly("seconds", &RunOutput::seconds)
       .def_readonly("final_stats", &RunOutput::final_stats)
       .def_readonly("max_robot_links", &RunOutput::max_robot_links)
       .def_readonly("max_blocks_touched", &RunOutput::max_blocks_touched)
       .def_readonly("rejected_observations", &RunOutput::rejected_observations)
-      .def_readonly("dead_reckoning", &RunOutput::dead_reckoning)
-      .def_readonly("groundtruth", &RunOutput::groundtruth)
-      .def_readonly("gps", &RunOutput::gps)
+      .def_readonly("interrupted", &RunOutput::interrupted,
+                    "stopped before its last step (Ctrl-C in run_dataset): everything here covers `steps`")
+      .def_readonly("dead_reckoning", &RunOutput::dead_reckoning, py::return_value_policy::copy)
+      .def_readonly("groundtruth", &RunOutput::groundtruth, py::return_value_policy::copy)
+      .def_readonly("gps", &RunOutput::gps, py::return_value_policy::copy)
       .def_readonly("dropped", &RunOutput::dropped)
       .def("trajectory_array", [](const RunOutput& o) { return poseArray(o.trajectory); }, "(n, 4): t, x, y, theta")
       .def("dead_reckoning_array", [](const RunOutput& o) { return poseArray(o.dead_reckoning); })
@@ -98,6 +102,13 @@ void bindRun(py::module_& m) {
       .def_readwrite("iterations", &RunRequest::iterations, "default iterations (the spec's overrides it)")
       .def_readwrite("map_covariances", &RunRequest::map_covariances)
       .def_readwrite("trajectory_covariances", &RunRequest::trajectory_covariances)
+      .def_readwrite("checkpoint_every", &RunRequest::checkpoint_every,
+                     "save the filter and the run so far to `checkpoint` after every N steps (0: only when "
+                     "the run is interrupted)")
+      .def_readwrite("checkpoint", &RunRequest::checkpoint, "the checkpoint file (replaced atomically each time)")
+      .def_readwrite("resume", &RunRequest::resume,
+                     "resume the run saved in this checkpoint (same dataset): the outputs equal those of the "
+                     "run never interrupted")
       .def_readwrite("command_line", &RunRequest::command_line, "recorded in metrics.json")
       .def("__repr__", [](py::handle s) {
         return reprOf(s, {"dataset", "format", "dataset_options", "filter", "outlier_gate", "seif", "map_covariances",
@@ -134,16 +145,16 @@ void bindRun(py::module_& m) {
       .def_readonly("output", &RunReport::output)
       .def_readonly("errors", &RunReport::errors)
       .def_readonly("landmarks", &RunReport::landmarks)
-      .def_readonly("smoother", &RunReport::smoother, "SmootherReport of a batch or smooth run, else None")
-      .def_readonly("association", &RunReport::association, "AssociationCounts of an nn or jcbb run, else None")
-      .def_readonly("association_ceiling", &RunReport::association_ceiling,
+      .def_readonly("smoother", &RunReport::smoother, py::return_value_policy::copy, "SmootherReport of a batch or smooth run, else None")
+      .def_readonly("association", &RunReport::association, py::return_value_policy::copy, "AssociationCounts of an nn or jcbb run, else None")
+      .def_readonly("association_ceiling", &RunReport::association_ceiling, py::return_value_policy::copy,
                     "AssociationCeiling of an nn or jcbb run on data with ground truth, else None")
-      .def_readonly("filter_errors", &RunReport::filter_errors, "smooth: the filter's errors before the batch")
+      .def_readonly("filter_errors", &RunReport::filter_errors, py::return_value_policy::copy, "smooth: the filter's errors before the batch")
       .def_readonly("filter_map_distance", &RunReport::filter_map_distance,
                     "smooth: RMS distance of the filter's map from the batch's [m]")
-      .def_readonly("filter_trajectory_distance", &RunReport::filter_trajectory_distance,
+      .def_readonly("filter_trajectory_distance", &RunReport::filter_trajectory_distance, py::return_value_policy::copy,
                     "with smooth: [RMS, median] distance of the filter's position from the batch's at every pose [m]")
-      .def_readonly("filter_covariance_ratio", &RunReport::filter_covariance_ratio,
+      .def_readonly("filter_covariance_ratio", &RunReport::filter_covariance_ratio, py::return_value_policy::copy,
                     "with smooth: trace(filter's landmark covariance) / trace(batch's) over the landmarks, "
                     "[median, 10th, 90th percentile]; below 1 the filter claims too little variance")
       .def_readonly("seconds_wall", &RunReport::seconds_wall)
@@ -151,15 +162,47 @@ void bindRun(py::module_& m) {
 
   m.def(
       "run_dataset",
-      [](const RunRequest& request, const std::filesystem::path& out, const py::object& progress) {
-        const auto callback = pythonCallback<double>(progress);
-        py::gil_scoped_release release;
-        return runDataset(request, out, callback);
+      [](RunRequest request, const std::filesystem::path& out, const py::object& progress) {
+        // Ctrl-C: Python's C handler only flags the signal; the flag is read here between
+        // steps (or KeyboardInterrupt comes out of the progress callback). The run then stops
+        // whole - outputs and any checkpoint written - and KeyboardInterrupt is raised after.
+        std::atomic<bool> stop{false};
+        std::optional<py::error_already_set> interrupt;
+        const std::function<void(double)> callback = [&](double fraction) {
+          py::gil_scoped_acquire gil;
+          try {
+            if (!progress.is_none()) progress(fraction);
+            if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+          } catch (py::error_already_set& e) {
+            if (!e.matches(PyExc_KeyboardInterrupt)) throw;
+            if (!interrupt) interrupt.emplace(std::move(e));
+            stop.store(true, std::memory_order_relaxed);
+          }
+        };
+        request.stop = &stop;
+        RunReport report;
+        std::exception_ptr failure;
+        {
+          py::gil_scoped_release release;
+          try {
+            report = runDataset(request, out, callback);
+          } catch (...) {
+            failure = std::current_exception();  // released below, with the GIL held
+          }
+        }
+        if (interrupt) {  // whatever the stopped run threw after (Interrupted: nothing to write)
+          interrupt->restore();
+          throw py::error_already_set();
+        }
+        if (failure) std::rethrow_exception(failure);
+        return report;
       },
       py::arg("request"), py::arg("out_dir"), py::arg("progress") = py::none(),
       "`seif run` as one call: writes trajectory.tum, dead_reckoning.tum, map.csv, metrics.json into "
       "out_dir (which must exist) and returns a RunReport. progress(fraction) is called during the run. "
-      "Raises DataError, NumericError, InvalidArgument.");
+      "Raises DataError, NumericError, InvalidArgument. Ctrl-C stops the run after the step it is in: the "
+      "outputs so far are written (metrics.json \"interrupted\": true; with request.checkpoint a checkpoint "
+      "to resume from), then KeyboardInterrupt is raised.");
 
   m.def(
       "run_filter",
@@ -271,7 +314,7 @@ void bindPaper(py::module_& m) {
       .def_readonly("name", &PaperFilterSpec::name)
       .def_readonly("ekf", &PaperFilterSpec::ekf)
       .def_readonly("seif", &PaperFilterSpec::seif)
-      .def_readonly("spec", &PaperFilterSpec::spec);
+      .def_readonly("spec", &PaperFilterSpec::spec, py::return_value_policy::copy);
   m.def("paper_filters", &paperFilters, py::arg("options") = PaperOptions{});
   m.def("paper_world", &paperWorld, py::arg("seed"), py::arg("options") = PaperOptions{},
         "The simulator configuration of the paper's run with seed `seed`.");
@@ -302,14 +345,14 @@ void bindPaper(py::module_& m) {
       .def_readonly("seed", &PaperRun::seed)
       .def_readonly("steps", &PaperRun::steps)
       .def_readonly("sim", &PaperRun::sim)
-      .def_readonly("filters", &PaperRun::filters);
+      .def_readonly("filters", &PaperRun::filters, py::return_value_policy::copy);
   py::class_<PaperFilterSummary>(m, "PaperFilterSummary")
       .def_readonly("name", &PaperFilterSummary::name)
       .def_readonly("seeds", &PaperFilterSummary::seeds)
       .def_readonly("mse", &PaperFilterSummary::mse)
       .def_readonly("rmse", &PaperFilterSummary::rmse)
       .def_readonly("aligned_mse", &PaperFilterSummary::aligned_mse)
-      .def_readonly("links", &PaperFilterSummary::links)
+      .def_readonly("links", &PaperFilterSummary::links, py::return_value_policy::copy)
       .def_readonly("mapped", &PaperFilterSummary::mapped)
       .def_readonly("robot_links", &PaperFilterSummary::robot_links)
       .def_readonly("pose_error", &PaperFilterSummary::pose_error)
@@ -346,7 +389,7 @@ void bindPaper(py::module_& m) {
             return out;
           },
           "the filters in paper_filters() order (alive as long as this object)")
-      .def_readonly("outputs", &PaperRunDetail::outputs);
+      .def_readonly("outputs", &PaperRunDetail::outputs, py::return_value_policy::copy);
   m.def(
       "run_paper_experiment",
       [](std::uint64_t seed, const PaperOptions& options) {
@@ -383,10 +426,10 @@ void bindPaper(py::module_& m) {
       .def_readonly("request", &PaperReport::request)
       .def_readonly("jobs", &PaperReport::jobs)
       .def_readonly("world", &PaperReport::world)
-      .def_readonly("specs", &PaperReport::specs)
-      .def_readonly("runs", &PaperReport::runs)
-      .def_readonly("failed", &PaperReport::failed)
-      .def_readonly("summaries", &PaperReport::summaries)
+      .def_readonly("specs", &PaperReport::specs, py::return_value_policy::copy)
+      .def_readonly("runs", &PaperReport::runs, py::return_value_policy::copy)
+      .def_readonly("failed", &PaperReport::failed, py::return_value_policy::copy)
+      .def_readonly("summaries", &PaperReport::summaries, py::return_value_policy::copy)
       .def_readonly("typical", &PaperReport::typical, "index into runs of the figures' run")
       .def("summary_text", &paperSummaryText, "what `seif paper` prints")
       .def("write", &writePaperResults, py::arg("dir"), py::call_guard<py::gil_scoped_release>(),
@@ -411,7 +454,7 @@ void bindPaper(py::module_& m) {
       .def_readonly("mean", &FilterSnapshot::mean)
       .def_readonly("covariance", &FilterSnapshot::covariance)
       .def_readonly("information", &FilterSnapshot::information)
-      .def_readonly("links", &FilterSnapshot::links);
+      .def_readonly("links", &FilterSnapshot::links, py::return_value_policy::copy);
   m.def("snapshot_by_id", &snapshotById, py::arg("filter"), py::call_guard<py::gil_scoped_release>());
 }
 
@@ -426,9 +469,9 @@ void bindConsistency(py::module_& m) {
   py::class_<ConsistencyOptions>(m, "ConsistencyOptions", "The Monte-Carlo NEES study (eval/consistency.hpp).")
       .def(py::init<>())
       .def_readwrite("world", &ConsistencyOptions::world)
-      .def_readwrite("datasets", &ConsistencyOptions::datasets, "real runs (then world and runs are unused)")
+      .def_readwrite("datasets", &ConsistencyOptions::datasets, py::return_value_policy::copy, "real runs (then world and runs are unused)")
       .def_readwrite("runs", &ConsistencyOptions::runs)
-      .def_readwrite("filters", &ConsistencyOptions::filters, "list of FilterSpec (parse_filter_spec)")
+      .def_readwrite("filters", &ConsistencyOptions::filters, py::return_value_policy::copy, "list of FilterSpec (parse_filter_spec)")
       .def_readwrite("samples", &ConsistencyOptions::samples)
       .def_readwrite("threads", &ConsistencyOptions::threads, "0: the number of cores")
       .def_readwrite("posterior_mean", &ConsistencyOptions::posterior_mean,
@@ -449,7 +492,7 @@ void bindConsistency(py::module_& m) {
       .def_readonly("spec", &ConsistencyFilterResult::spec, "its index in ConsistencyOptions.filters")
       .def_readonly("posterior_mean", &ConsistencyFilterResult::posterior_mean,
                     "the figures of the posterior's mean H^-1 b, not the filter's own estimate")
-      .def_readonly("nees", &ConsistencyFilterResult::nees)
+      .def_readonly("nees", &ConsistencyFilterResult::nees, py::return_value_policy::copy)
       .def_readonly("nees_final", &ConsistencyFilterResult::nees_final)
       .def_readonly("landmark_nees_runs", &ConsistencyFilterResult::landmark_nees_runs)
       .def_readonly("error_final", &ConsistencyFilterResult::error_final)
@@ -459,7 +502,7 @@ void bindConsistency(py::module_& m) {
       .def_readonly("mse_runs", &ConsistencyFilterResult::mse_runs, "mean squared landmark error of each run (NaN: stopped)")
       .def_readonly("mse_aligned_runs", &ConsistencyFilterResult::mse_aligned_runs)
       .def_readonly("seconds", &ConsistencyFilterResult::seconds)
-      .def_readonly("failed_runs", &ConsistencyFilterResult::failed_runs,
+      .def_readonly("failed_runs", &ConsistencyFilterResult::failed_runs, py::return_value_policy::copy,
                     "runs it stopped in (a numerical failure), left out of its figures");
   py::class_<ConsistencyResult>(m, "ConsistencyResult")
       .def_readonly("runs", &ConsistencyResult::runs)
@@ -467,7 +510,7 @@ void bindConsistency(py::module_& m) {
       .def_readonly("pose_band", &ConsistencyResult::pose_band)
       .def_readonly("landmark_band", &ConsistencyResult::landmark_band)
       .def_readonly("sample_steps", &ConsistencyResult::sample_steps)
-      .def_readonly("filters", &ConsistencyResult::filters);
+      .def_readonly("filters", &ConsistencyResult::filters, py::return_value_policy::copy);
   m.def(
       "run_consistency",
       [](const ConsistencyOptions& options, const py::object& progress) {

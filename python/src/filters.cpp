@@ -388,7 +388,7 @@ void bindSlamFilter(py::module_& m) {
            "H^-1 b by sparse Cholesky, without changing the filter")
       .def("relax_mean", &SeifSlam::relaxMean, py::arg("sweeps"), "Gauss-Seidel sweeps of the mean over every variable (the landmarks over-relaxed by options.omega)")
       .def("active_landmarks", &SeifSlam::activeLandmarks, "ids of the landmarks linked to the robot")
-      .def_property_readonly("options", &SeifSlam::options)
+      .def_property_readonly("options", &SeifSlam::options, py::return_value_policy::copy)
       .def("last_sparsification_residual", &SeifSlam::lastSparsificationResidual)
       .def_property_readonly("eseif_relocalizations", &SeifSlam::eseifRelocalizations)
       .def_property_readonly("eseif_deferrals", &SeifSlam::eseifDeferrals)
@@ -512,8 +512,8 @@ void bindAssociation(py::module_& m) {
           "The observations with their landmark ids (ambiguous ones left out); may remove provisional landmarks")
       .def("finish", &Associator::finish, py::arg("filter"))
       .def("truth_of", &Associator::truthOf, py::arg("id"))
-      .def_property_readonly("counts", &Associator::counts)
-      .def_property_readonly("options", &Associator::options);
+      .def_property_readonly("counts", &Associator::counts, py::return_value_policy::copy)
+      .def_property_readonly("options", &Associator::options, py::return_value_policy::copy);
 }
 
 void bindFilters(py::module_& m) {

@@ -28,11 +28,11 @@ void bindSources(py::module_& m) {
       .def_property_readonly("motion", [](const DatasetInfo& i) { return std::const_pointer_cast<MotionModel>(i.motion); })
       .def_property_readonly("sensor",
                              [](const DatasetInfo& i) { return std::const_pointer_cast<MeasurementModel>(i.sensor); })
-      .def_readonly("noise", &DatasetInfo::noise)
+      .def_readonly("noise", &DatasetInfo::noise, py::return_value_policy::copy)
       .def_readonly("start_pose", &DatasetInfo::start_pose)
       .def_readonly("start_pose_source", &DatasetInfo::start_pose_source)
       .def_readonly("start_pose_id", &DatasetInfo::start_pose_id)
-      .def_readonly("landmarks", &DatasetInfo::landmarks)
+      .def_readonly("landmarks", &DatasetInfo::landmarks, py::return_value_policy::copy)
       .def_readonly("has_groundtruth", &DatasetInfo::has_groundtruth)
       .def_readonly("has_gps", &DatasetInfo::has_gps)
       .def("filter_config",

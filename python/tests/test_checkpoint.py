@@ -1,5 +1,8 @@
 """Checkpoints from Python: save / load and pickling continue a run bit-identically."""
+import json
+import os
 import pickle
+import signal
 
 import numpy as np
 import pytest
@@ -174,3 +177,57 @@ def test_run_loop_with_a_python_observer(paper_world):
     h = seif.make_filter("ekf", seif.start_pose(data), paper_config(world))
     seif.run_loop(h, data, associate=lambda filt, step, k, z: [])
     assert h.landmark_ids() == []
+
+    # stop() ends the run early but whole: on_stop with the steps consumed, then on_finish.
+    class Stops(Recorder):
+        def __init__(self):
+            super().__init__()
+            self.stopped = None
+
+        def on_stop(self, filter, steps):
+            self.stopped = steps
+
+    rec = Stops()
+    s = seif.make_filter("seif", seif.start_pose(data), paper_config(world))
+    assert seif.run_loop(s, data, [rec], stop=lambda: len(rec.steps) == 40) == 40
+    assert rec.stopped == 40 and rec.finished
+    assert rec.steps[-1][0] == 39
+
+
+def test_keyboard_interrupt_stops_a_run_whole_and_its_checkpoint_resumes(tmp_path):
+    """Ctrl-C during run_dataset: the run stops after the step it is in, writes its outputs and
+    the checkpoint, then KeyboardInterrupt is raised; the checkpoint resumes to the whole run."""
+    folder = tmp_path / "data"
+    seif.write_mrclam(folder, seif.simulate(seif.preset_config("paper", 0, 3000, 3)))
+    whole = tmp_path / "whole"
+    whole.mkdir()
+    seif.run_dataset(seif.RunRequest(str(folder), "seif"), str(whole))
+
+    request = seif.RunRequest(str(folder), "seif")
+    request.checkpoint = str(tmp_path / "run.ckpt")
+    reports = []
+
+    def ctrl_c_at_the_second_report(fraction):  # progress comes every 1024 steps
+        reports.append(fraction)
+        if len(reports) == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    part = tmp_path / "part"
+    part.mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        seif.run_dataset(request, str(part), ctrl_c_at_the_second_report)
+    metrics = json.loads((part / "metrics.json").read_text())
+    assert metrics["interrupted"] is True
+    assert metrics["steps"] == 1025
+    part_tum = (part / "trajectory.tum").read_text().splitlines()
+    assert len(part_tum) == 1 + 1026  # the header, the start pose and 1025 steps
+    assert part_tum == (whole / "trajectory.tum").read_text().splitlines()[: len(part_tum)]
+
+    resume = seif.RunRequest(str(folder), "seif")
+    resume.resume = request.checkpoint
+    resumed = tmp_path / "resumed"
+    resumed.mkdir()
+    report = seif.run_dataset(resume, str(resumed))
+    assert not report.output.interrupted
+    for name in ("trajectory.tum", "dead_reckoning.tum", "map.csv"):
+        assert (resumed / name).read_bytes() == (whole / name).read_bytes(), name

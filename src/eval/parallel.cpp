@@ -25,15 +25,15 @@ void parallelFor(std::size_t count, unsigned threads, const std::function<void(s
     for (std::size_t i = next++; i < count; i = next++) {
       try {
         task(i);
+        const std::lock_guard<std::mutex> lock(mutex);
+        ++finished;
+        if (done) done(finished, count);  // it may throw too (a Python callback): the same path
       } catch (...) {
         const std::lock_guard<std::mutex> lock(mutex);
         if (!failure) failure = std::current_exception();
         next = count;  // no new task starts
         return;
       }
-      const std::lock_guard<std::mutex> lock(mutex);
-      ++finished;
-      if (done) done(finished, count);
     }
   };
   std::vector<std::thread> pool;

@@ -12,8 +12,9 @@ unsigned threadCount(unsigned requested, std::size_t tasks);
 
 /// Runs task(i) for every i in [0, count) on threadCount(threads, count) threads (the
 /// calling one among them), taking the indices in order. `done(finished, count)` follows
-/// every task that returned, one call at a time. The first exception a task throws stops
-/// the others from starting new tasks and is rethrown here once all have stopped.
+/// every task that returned, one call at a time. The first exception a task or `done`
+/// throws stops the others from starting new tasks and is rethrown here once all have
+/// stopped.
 void parallelFor(std::size_t count, unsigned threads, const std::function<void(std::size_t)>& task,
                  const std::function<void(std::size_t, std::size_t)>& done = {});
 

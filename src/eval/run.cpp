@@ -60,6 +60,7 @@ class OutputRecorder : public RunObserver {
     out_.rejected_observations = filter.rejectedObservations();
     out_.max_robot_links = std::max(out_.max_robot_links, out_.final_stats.robot_links);
   }
+  void onStop(const SlamFilter&, std::size_t) override { out_.interrupted = true; }
   void onGroundTruth(const TimedPose& pose) override { out_.groundtruth.push_back(pose); }
   void onGps(const GpsFix& fix) override { out_.gps.push_back(fix); }
 
@@ -140,7 +141,7 @@ RunOutput runFilter(SlamFilter& filter, const Dataset& data,
 
 RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function<void(double)>& progress,
                     bool pose_covariances, const RunCheckpointing& checkpointing, const RunResume* resume,
-                    Associator* associator) {
+                    Associator* associator, const std::atomic<bool>* stop) {
   RunOutput out;
   if (resume) out = resume->output;
   StepAssembler steps;
@@ -153,8 +154,9 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
   observers.push_back(&dead_reckoning);
   if (progress) observers.push_back(&reporter);
   CheckpointWriter checkpoints(checkpointing, out);
-  if (checkpointing.every > 0) observers.push_back(&checkpoints);
+  if (!checkpointing.path.empty()) observers.push_back(&checkpoints);
   RunLoopOptions options;
+  options.stop = stop;
   if (resume) options.start_step = resume->steps;
   if (associator) {
     options.associate = [associator](SlamFilter& f, const Step&, std::size_t k, std::vector<Observation>& z) {

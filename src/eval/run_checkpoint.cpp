@@ -29,9 +29,12 @@ std::vector<TimedPose> readTrack(ArchiveReader& r, const char* what) {
 }  // namespace
 
 void CheckpointWriter::afterUpdate(const SlamFilter& filter, const Step&, std::size_t k, double) {
-  if ((k + 1) % policy_.every != 0) return;
+  if (policy_.every > 0 && (k + 1) % policy_.every == 0) save(filter, k + 1);
+}
+
+void CheckpointWriter::save(const SlamFilter& filter, std::size_t steps) const {
   CheckpointExtras extras;
-  extras.steps_consumed = k + 1;
+  extras.steps_consumed = steps;
   extras.values = policy_.values;
   extras.values[std::string(kRunOutputKey)] = encodeRunOutput(out_);
   saveCheckpoint(filter, policy_.path, extras);

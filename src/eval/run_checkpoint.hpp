@@ -10,13 +10,17 @@
 namespace seif {
 
 /// Saves the filter and `out` (kept up to date by the observers before it) after every
-/// `every`-th step, as a checkpoint whose extras say how many steps were consumed.
+/// `every`-th step and where a stopped run stops, as a checkpoint whose extras say how many
+/// steps were consumed.
 class CheckpointWriter : public RunObserver {
  public:
   CheckpointWriter(const RunCheckpointing& policy, const RunOutput& out) : policy_(policy), out_(out) {}
   void afterUpdate(const SlamFilter& filter, const Step& step, std::size_t k, double seconds) override;
+  void onStop(const SlamFilter& filter, std::size_t steps) override { save(filter, steps); }
 
  private:
+  void save(const SlamFilter& filter, std::size_t steps) const;
+
   const RunCheckpointing& policy_;
   const RunOutput& out_;
 };

@@ -79,6 +79,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"start_pose", {r.info.start_pose.x(), r.info.start_pose.y(), r.info.start_pose.z()}},
       {"start_pose_source", r.info.start_pose_source},
       {"steps", out.steps},
+      {"interrupted", out.interrupted},
       {"landmarks", r.landmarks},
       {"seconds", out.seconds},
       {"seconds_wall", r.seconds_wall},
@@ -266,6 +267,9 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   config.outlier_gate = request.outlier_gate;
   config.linearization = request.linearization;
   config.iterations = request.iterations;
+  if (request.checkpoint_every > 0 && request.checkpoint.empty()) {
+    throw InvalidArgument("checkpoints: checkpoint_every needs a checkpoint file");
+  }
   RunCheckpointing checkpointing;
   checkpointing.every = request.checkpoint_every;
   checkpointing.path = request.checkpoint;
@@ -285,25 +289,28 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
     resume = runResumeFrom(extras.values, static_cast<std::size_t>(extras.steps_consumed), name);
   } else {
     const FilterSpec spec = requestedSpec(request, request.filter);
-    if (request.checkpoint_every > 0 && (request.smooth || spec.name == "batch")) {
+    if (!request.checkpoint.empty() && (request.smooth || spec.name == "batch")) {
       throw InvalidArgument("checkpoints: the batch MAP (and --smooth) keeps every measurement and has no checkpoint");
     }
     filter = request.smooth ? makeSmoother(spec, source->info().start_pose, config, request.batch)
                             : makeFilter(spec, source->info().start_pose, config);
   }
   const bool associating = request.association.method != AssociationMethod::Known;
-  if (associating && (request.checkpoint_every > 0 || !request.resume.empty())) {
+  if (associating && (!request.checkpoint.empty() || !request.resume.empty())) {
     throw InvalidArgument("checkpoints: a run with --association nn or jcbb has no checkpoint (the associator's "
                           "provisional landmarks are not saved)");
   }
   Associator associator(request.association);
   report.output = runFilter(*filter, *source, progress, request.trajectory_covariances, checkpointing,
-                            resume ? &*resume : nullptr, &associator);
+                            resume ? &*resume : nullptr, &associator, request.stop);
   if (associating || request.association.drop_unlabelled) report.association = associator.counts();
   report.filter = checkpointing.values["filter"];
   report.info = source->info();
   source.reset();
-  if (report.output.steps == 0) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
+  if (report.output.steps == 0 && report.output.interrupted && !resume) {
+    throw Interrupted("run interrupted before its first step: nothing written to " + out.string());
+  }
+  if (report.output.steps == 0 && !report.output.interrupted) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
   report.seconds_wall = secondsSince(start);
   if (associating && report.info.has_groundtruth && !report.info.landmarks.empty()) {  // an evaluation: not timed
     const auto reread = openDataset(request.dataset, request.format, request.dataset_options);

@@ -39,12 +39,20 @@ void runStep(SlamFilter& filter, const Step& step, std::size_t k, const std::vec
       filter.update(step.observations);
       seconds += secondsBetween(t2, Clock::now());
     }
-  } catch (const std::exception& e) {
+  } catch (const Error& e) {  // seif's own: named with the step; anything else passes as it is
     std::ostringstream msg;
     msg << filter.name() << ": step " << k << " (t = " << std::fixed << step.time << "): " << e.what();
     throw NumericError(msg.str());
   }
   for (RunObserver* o : observers) o->afterUpdate(filter, step, k, seconds);
+}
+
+bool stopRequested(const RunLoopOptions& options) {
+  return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
+}
+
+void stopRun(SlamFilter& filter, const std::vector<RunObserver*>& observers, std::size_t consumed) {
+  for (RunObserver* o : observers) o->onStop(filter, consumed);
 }
 
 void finishRun(SlamFilter& filter, const std::vector<RunObserver*>& observers) {
@@ -61,9 +69,16 @@ std::size_t runLoop(SlamFilter& filter, const Dataset& data, const std::vector<R
   const std::size_t first = std::min(options.start_step, data.steps.size());
   const double start_time = first == 0 ? data.start_time : data.steps[first - 1].time;
   for (RunObserver* o : observers) o->onStart(filter, start_time);
-  for (std::size_t k = first; k < data.steps.size(); ++k) runStep(filter, data.steps[k], k, observers, options);
+  std::size_t k = first;
+  for (; k < data.steps.size(); ++k) {
+    if (stopRequested(options)) {
+      stopRun(filter, observers, k);
+      break;
+    }
+    runStep(filter, data.steps[k], k, observers, options);
+  }
   finishRun(filter, observers);
-  return data.steps.size() - first;
+  return k - first;
 }
 
 std::size_t runLoop(SlamFilter& filter, EventSource& source, StepAssembler& steps,
@@ -83,6 +98,15 @@ std::size_t runLoop(SlamFilter& filter, EventSource& source, StepAssembler& step
   std::size_t k = 0, run = 0;
   double last_time = 0.0;  // time of the last skipped step
   while (steps.next(source, step, &groundtruth, &gps)) {
+    if (k >= options.start_step && stopRequested(options)) {
+      // What the stream carried with the step not run (ground truth, GPS) is not handed on.
+      if (run == 0) {
+        for (RunObserver* o : observers) o->onStart(filter, k == 0 ? steps.startTime() : last_time);
+      }
+      stopRun(filter, observers, k);
+      finishRun(filter, observers);
+      return run;
+    }
     handOn();
     if (k < options.start_step) {
       last_time = step.time;

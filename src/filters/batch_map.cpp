@@ -102,6 +102,7 @@ void BatchMap::addBodyStep(const Vec3& body, const Mat3& U_body) {
 }
 
 void BatchMap::predict(const MotionIncrement& increment) {
+  checkIncrement(increment, name());
   const Mat3 Rt = poseRotation(pose()(2)).transpose();  // linearised by the caller at pose()
   invalidate();
   const Vec3 body = Rt * increment.delta;

@@ -37,7 +37,11 @@ void LandmarkBook::check(std::span<const Observation> z, const MeasurementModel&
   for (std::size_t k = 0; k < z.size(); ++k) {
     if (z[k].landmark < 0) badObservation(filter_, k, z[k], "no landmark id; this filter needs known data association");
     if (!z[k].z.allFinite()) badObservation(filter_, k, z[k], "the measurement is not finite");
-    if (!sensor.noise(z[k]).allFinite()) badObservation(filter_, k, z[k], "the measurement noise is not finite");
+    const Mat2 R = sensor.noise(z[k]);
+    if (!R.allFinite()) badObservation(filter_, k, z[k], "the measurement noise is not finite");
+    if (!(R(0, 0) > 0.0 && R(0, 0) * R(1, 1) - R(0, 1) * R(1, 0) > 0.0)) {
+      badObservation(filter_, k, z[k], "the measurement noise is not positive definite");
+    }
   }
 }
 
@@ -108,6 +112,7 @@ bool LandmarkBook::rejects(const MeasurementModel& sensor, const Pose2& x, const
 }
 
 MotionIncrement LandmarkBook::motionIncrement(const MotionIncrement& m, const Vec2& position) {
+  checkIncrement(m, filter_);  // before anything changes: a predict is all or nothing
   return fej_ ? fej_->fejIncrement(m, position) : m;
 }
 

@@ -6,6 +6,8 @@
 #include <seif/models/velocity_model.hpp>
 #include "models/velocity_motion.hpp"
 
+#include <Eigen/LU>
+
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -31,6 +33,23 @@ void requireDt(double dt) {
 }
 
 }  // namespace
+
+void checkIncrement(const MotionIncrement& m, const std::string& who) {
+  if (!m.delta.allFinite() || !m.J_delta_x.allFinite() || !m.U.allFinite()) {
+    throw ModelError(who + ": the motion increment is not finite");
+  }
+  // U >= 0 iff every principal minor is >= 0; rounding may leave a singular U's slightly below.
+  const Mat3& U = m.U;
+  const double tol = 1e-9;
+  bool psd = U.diagonal().minCoeff() >= 0.0 && (U - U.transpose()).cwiseAbs().maxCoeff() <= tol * U.cwiseAbs().maxCoeff();
+  for (int i = 0; psd && i < 3; ++i) {
+    for (int j = i + 1; j < 3; ++j) {
+      psd = psd && U(i, i) * U(j, j) - U(i, j) * U(j, i) >= -tol * U(i, i) * U(j, j);
+    }
+  }
+  psd = psd && U.determinant() >= -tol * U(0, 0) * U(1, 1) * U(2, 2);
+  if (!psd) throw ModelError(who + ": the motion increment's process noise U is not positive semidefinite");
+}
 
 MotionIncrement compose(const MotionIncrement& first, const MotionIncrement& second) {
   const Mat3 G2 = Mat3::Identity() + second.J_delta_x;

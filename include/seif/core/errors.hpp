@@ -112,6 +112,13 @@ class ModelError : public InvalidArgument {
   using InvalidArgument::InvalidArgument;
 };
 
+/// A run stopped on request (RunRequest::stop: Ctrl-C in `seif run`) before it had anything
+/// to write. The CLI exits 130 for it, as for a run it stopped after writing its outputs.
+class Interrupted : public Error {
+ public:
+  using Error::Error;
+};
+
 /// A landmark id that is not in the map.
 class UnknownLandmark : public Error {
  public:

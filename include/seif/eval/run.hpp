@@ -10,6 +10,7 @@
 #include <seif/io/event_source.hpp>
 #include <seif/eval/step_assembler.hpp>
 
+#include <atomic>
 #include <cstddef>
 #include <filesystem>
 #include <functional>
@@ -36,6 +37,9 @@ struct RunOutput {
   std::size_t max_robot_links = 0;     ///< over all steps
   std::size_t max_blocks_touched = 0;  ///< over all steps
   std::size_t rejected_observations = 0;  ///< by the gross-outlier gate (OutlierGate)
+  /// Stopped before its last step (RunLoopOptions::stop, Ctrl-C in `seif run`): everything
+  /// here covers the `steps` run.
+  bool interrupted = false;
   // Streamed runs only (runFilter over an EventSource): what the stream carried besides
   // controls and observations, and the controls integrated alone. All O(steps).
   std::vector<TimedPose> dead_reckoning;  ///< the start pose, then after every step
@@ -47,8 +51,9 @@ struct RunOutput {
 /// Checkpoints of a streamed run (`seif run --checkpoint-every N --checkpoint FILE`): after
 /// every `every` steps the filter and the run so far are saved to `path` (atomically, the
 /// previous one replaced), with `values` recorded beside them (the dataset, the spec).
+/// A run stopped early (runFilter's `stop`) saves one where it stopped, whatever `every`.
 struct RunCheckpointing {
-  std::size_t every = 0;  ///< 0: never
+  std::size_t every = 0;  ///< 0: never periodically (only where a stopped run stops)
   std::filesystem::path path;
   std::map<std::string, std::string> values;
 };
@@ -72,11 +77,13 @@ RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::s
 /// the checkpoint's) and the outputs continue resume->output: a resumed run ends with the
 /// same outputs, bit for bit, as the run that was never interrupted (timings aside).
 /// With `associator`, it gives the observations their landmark ids before each update
-/// (and its finish() is called after the run).
+/// (and its finish() is called after the run). Once `*stop` is true the run ends before its
+/// next step, as if that were the end of the data (RunOutput::interrupted), and with a
+/// checkpoint path saves a checkpoint there to resume from.
 RunOutput runFilter(SlamFilter& filter, EventSource& source,
                     const std::function<void(double)>& progress = {}, bool pose_covariances = false,
                     const RunCheckpointing& checkpointing = {}, const RunResume* resume = nullptr,
-                    Associator* associator = nullptr);
+                    Associator* associator = nullptr, const std::atomic<bool>* stop = nullptr);
 
 /// The pose the filter starts from: the ground truth at the first step's time when the
 /// dataset has ground truth, else the origin.

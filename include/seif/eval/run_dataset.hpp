@@ -17,6 +17,7 @@
 #include <seif/filters/seif_options.hpp>
 #include <seif/io/event_source.hpp>
 
+#include <atomic>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -54,6 +55,11 @@ struct RunRequest {
   /// the outputs equal those of the run that was never interrupted.
   std::filesystem::path resume;
   std::string command_line;     ///< recorded in metrics.json
+  /// Set to true (from another thread or a signal handler) to stop the run before its next
+  /// step: the outputs are written for the steps run (RunOutput::interrupted, metrics.json
+  /// "interrupted"), and with `checkpoint` a checkpoint is saved there to resume from (even
+  /// with checkpoint_every = 0). Null: the run goes to the end of the data.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 struct RunErrors {
@@ -94,7 +100,8 @@ struct RunReport {
 
 /// Runs `request` and writes the three files into `out` (which must exist and be writable).
 /// `progress(fraction)` is called during the run. Throws DataError for bad input,
-/// NumericError for a numerical failure, InvalidArgument for a bad request.
+/// NumericError for a numerical failure, InvalidArgument for a bad request, Interrupted for
+/// a run stopped before its first step.
 RunReport runDataset(const RunRequest& request, const std::filesystem::path& out,
                      const std::function<void(double)>& progress = {});
 

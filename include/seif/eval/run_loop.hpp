@@ -8,12 +8,15 @@
 // Two seams for what comes later: RunLoopOptions::associate may rewrite a step's
 // observations between predict and update (data association), and
 // RunLoopOptions::start_step skips the first steps of the source without calling the
-// filter (a run resumed from a checkpoint saved after step start_step - 1).
+// filter (a run resumed from a checkpoint saved after step start_step - 1). A third,
+// RunLoopOptions::stop, ends a run early but whole (Ctrl-C in `seif run`): the filter is
+// finished and observed as after a last step, so what was run is kept.
 #include <seif/core/dataset.hpp>
 #include <seif/eval/step_assembler.hpp>
 #include <seif/filters/slam_filter.hpp>
 #include <seif/io/event_source.hpp>
 
+#include <atomic>
 #include <cstddef>
 #include <functional>
 #include <vector>
@@ -35,6 +38,10 @@ class RunObserver {
   /// (predict + update, without the observers and the association hook).
   virtual void afterUpdate(const SlamFilter& /*filter*/, const Step& /*step*/, std::size_t /*k*/,
                            double /*seconds*/) {}
+  /// The run was stopped (RunLoopOptions::stop) with steps left: after the last step run and
+  /// before finish(). `steps` counts the source's steps consumed (skipped ones included):
+  /// a run resumed with start_step = steps goes on where this one stopped.
+  virtual void onStop(const SlamFilter& /*filter*/, std::size_t /*steps*/) {}
   /// After the last step and the filter's finish(); `seconds` is finish()'s wall time.
   virtual void onFinish(const SlamFilter& /*filter*/, double /*seconds*/) {}
   /// Streamed runs: the ground truth and GPS fixes the stream carries, as they come
@@ -54,11 +61,17 @@ struct RunLoopOptions {
   std::size_t start_step = 0;
   /// Data association between predict and update; none: the step's observations as they are.
   AssociateHook associate;
+  /// Read before each step to run: once true (set from any thread, a signal handler or an
+  /// observer), the run ends there - onStop, then finish() and onFinish as after a last step.
+  /// Null: the run goes to the end of its steps.
+  const std::atomic<bool>* stop = nullptr;
 };
 
-/// Runs the steps of `data` from options.start_step through `filter`, then finish().
-/// A failure inside a step (the filter's or the association hook's) is rethrown as
-/// NumericError "<filter name>: step k (t = <time>): <what>". Returns the steps run.
+/// Runs the steps of `data` from options.start_step through `filter` (until options.stop),
+/// then finish().
+/// A seif::Error inside a step (the filter's or the association hook's) is rethrown as
+/// NumericError "<filter name>: step k (t = <time>): <what>"; any other exception (a
+/// caller's own, a Python error from a hook) passes unchanged. Returns the steps run.
 std::size_t runLoop(SlamFilter& filter, const Dataset& data, const std::vector<RunObserver*>& observers,
                     const RunLoopOptions& options = {});
 

@@ -15,6 +15,11 @@ struct MotionIncrement {
   Mat3 U = Mat3::Zero();          ///< process noise in pose space (may be singular)
 };
 
+/// Throws ModelError "<who>: ..." unless every entry of `m` is finite and its process noise U
+/// is positive semidefinite (principal minors >= 0 up to rounding): what a filter's predict
+/// checks before it changes anything.
+void checkIncrement(const MotionIncrement& m, const std::string& who);
+
 /// `first` then `second` (linearised at the pose `first` predicts) as one increment: with
 /// x' = x + Delta + J (x - mu) + w, w ~ N(0, U), and G = I + J,
 /// Delta = Delta_1 + Delta_2, G = G_2 G_1, U = G_2 U_1 G_2^T + U_2 (heading not wrapped).

@@ -1,0 +1,147 @@
+// A run stopped early (RunRequest::stop; Ctrl-C or SIGTERM in `seif run`) writes its outputs
+// for the steps it ran, says so in metrics.json, saves a checkpoint when given a file, and that
+// checkpoint resumes to the outputs of the run never stopped.
+#include "cli_support.hpp"
+
+#include <seif/core/errors.hpp>
+#include <seif/eval/run_dataset.hpp>
+#include <seif/io/mrclam.hpp>
+#include <seif/sim/world.hpp>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+#include <filesystem>
+#include <string>
+
+namespace fs = std::filesystem;
+using seif::test::runCli;
+using seif::test::scratchDir;
+using seif::test::estimateMetrics;
+using seif::test::slurp;
+
+namespace {
+
+
+void expectSameOutputs(const fs::path& a, const fs::path& b) {
+  for (const char* file : {"trajectory.tum", "dead_reckoning.tum", "map.csv"}) {
+    EXPECT_EQ(slurp(a / file), slurp(b / file)) << file;
+  }
+  EXPECT_EQ(estimateMetrics(a), estimateMetrics(b));
+}
+
+/// The paper's world over `steps` steps, written as an MRCLAM folder.
+fs::path writeWorld(const fs::path& dir, int steps) {
+  const fs::path data = dir / "data";
+  seif::writeMrclam(data, seif::simulate(seif::presetConfig(seif::WorldPreset::Paper, 50, steps, 3)));
+  return data;
+}
+
+TEST(RunStop, AStoppedRunWritesWhatItRanAndItsCheckpointResumesToTheWholeRun) {
+  const auto dir = scratchDir("run-stop");
+  const fs::path data = writeWorld(dir, 3000);  // progress is reported every 1024 steps
+  for (const char* filter : {"seif", "ekf"}) {
+    SCOPED_TRACE(filter);
+    seif::RunRequest request;
+    request.dataset = data;
+    request.filter = filter;
+    const fs::path whole = dir / (std::string(filter) + "-whole");
+    fs::create_directories(whole);
+    const seif::RunReport full = seif::runDataset(request, whole);
+    EXPECT_FALSE(full.output.interrupted);
+    EXPECT_FALSE(estimateMetrics(whole).at("interrupted").get<bool>());
+
+    // Stopped from the second progress report on (after step 1024), with a checkpoint file
+    // and no periodic checkpoints.
+    std::atomic<bool> stop{false};
+    int reports = 0;
+    request.stop = &stop;
+    request.checkpoint = dir / (std::string(filter) + ".ckpt");
+    const fs::path part = dir / (std::string(filter) + "-part");
+    fs::create_directories(part);
+    const seif::RunReport stopped = seif::runDataset(request, part, [&](double) {
+      if (++reports == 2) stop.store(true);
+    });
+    EXPECT_TRUE(stopped.output.interrupted);
+    EXPECT_EQ(stopped.output.steps, 1025u);
+    EXPECT_EQ(stopped.output.trajectory.size(), 1026u);
+    const nlohmann::json metrics = estimateMetrics(part);
+    EXPECT_TRUE(metrics.at("interrupted").get<bool>());
+    EXPECT_EQ(metrics.at("steps").get<std::size_t>(), 1025u);
+    // The trajectory written is the whole run's first 1026 poses.
+    const std::string a = slurp(part / "trajectory.tum"), b = slurp(whole / "trajectory.tum");
+    ASSERT_LT(a.size(), b.size());
+    EXPECT_EQ(a, b.substr(0, a.size()));
+
+    // The checkpoint saved where it stopped resumes to the whole run's outputs.
+    seif::RunRequest resume;
+    resume.dataset = data;
+    resume.resume = request.checkpoint;
+    const fs::path resumed = dir / (std::string(filter) + "-resumed");
+    fs::create_directories(resumed);
+    const seif::RunReport rest = seif::runDataset(resume, resumed);
+    EXPECT_FALSE(rest.output.interrupted);
+    expectSameOutputs(resumed, whole);
+  }
+}
+
+TEST(RunStop, AStopBeforeTheFirstStepIsInterruptedAndWritesNothing) {
+  const auto dir = scratchDir("run-stop-first");
+  seif::RunRequest request;
+  request.dataset = writeWorld(dir, 50);
+  std::atomic<bool> stop{true};
+  request.stop = &stop;
+  const fs::path out = dir / "out";
+  fs::create_directories(out);
+  EXPECT_THROW(seif::runDataset(request, out), seif::Interrupted);
+  EXPECT_FALSE(fs::exists(out / "metrics.json"));
+}
+
+TEST(RunStop, ACheckpointFileWithoutAPeriodIsWrittenOnlyWhenTheRunStops) {
+  const auto dir = scratchDir("run-stop-period");
+  seif::RunRequest request;
+  request.dataset = writeWorld(dir, 200);
+  request.checkpoint = dir / "run.ckpt";
+  const fs::path out = dir / "out";
+  fs::create_directories(out);
+  seif::runDataset(request, out);
+  EXPECT_FALSE(fs::exists(request.checkpoint));
+  request.checkpoint.clear();
+  request.checkpoint_every = 10;  // a period without a file is a bad request
+  EXPECT_THROW(seif::runDataset(request, out), seif::InvalidArgument);
+}
+
+// `seif run` stopped by a signal: exit 130, one line on stderr saying how many steps ran and
+// how to go on, the outputs of those steps written, and the checkpoint resumes to the whole
+// run. The run is long enough (the EKF over 300 landmarks: 2-3 s in Release) for the signal to
+// come in the middle of it; labelled slow (tests/CMakeLists.txt).
+TEST(RunStopCli, SigtermAndSigintStopTheRunAndItsCheckpointResumes) {
+  const auto dir = scratchDir("run-stop-cli");
+  const fs::path data = dir / "data";
+  ASSERT_EQ(runCli("simulate --preset uniform --landmarks 300 --seed 2 --out " + data.string()).status, 0);
+  const std::string run = "run --dataset " + data.string() + " --filter ekf --map-covariance none";
+  const auto whole = runCli(run + " --out " + (dir / "whole").string());
+  ASSERT_EQ(whole.status, 0) << whole.err;
+  const std::size_t total = estimateMetrics(dir / "whole").at("steps").get<std::size_t>();
+  for (const char* signal : {"TERM", "INT"}) {
+    SCOPED_TRACE(signal);
+    const fs::path ckpt = dir / (std::string(signal) + ".ckpt"), part = dir / (std::string(signal) + "-part");
+    const auto stopped =
+        seif::test::runCliSignalled(run + " --checkpoint " + ckpt.string() + " --out " + part.string(), signal, 0.5);
+    ASSERT_EQ(stopped.status, 130) << stopped.out << stopped.err;
+    EXPECT_NE(stopped.err.find("run interrupted after "), std::string::npos) << stopped.err;
+    EXPECT_NE(stopped.err.find("--resume " + ckpt.string()), std::string::npos) << stopped.err;
+    EXPECT_NE(stopped.out.find("wrote " + part.string()), std::string::npos) << stopped.out;
+    const nlohmann::json metrics = estimateMetrics(part);
+    EXPECT_TRUE(metrics.at("interrupted").get<bool>());
+    EXPECT_GT(metrics.at("steps").get<std::size_t>(), 0u);
+    EXPECT_LT(metrics.at("steps").get<std::size_t>(), total);
+    const auto resumed = runCli("run --dataset " + data.string() + " --resume " + ckpt.string() +
+                                " --map-covariance none --out " + (dir / (std::string(signal) + "-resumed")).string());
+    ASSERT_EQ(resumed.status, 0) << resumed.err;
+    expectSameOutputs(dir / (std::string(signal) + "-resumed"), dir / "whole");
+  }
+}
+
+}  // namespace
