@@ -358,3 +358,18 @@ def test_seif_coarse_level_reaches_python(paper_world):
 
     base = "seif:linearization=invariant,iterations=2,active=6,gauge=kept"
     assert lag(base + ",coarse=rigid") < 0.5 * lag(base)
+
+
+def test_new_landmarks_never_take_an_id_the_filter_already_holds():
+    """An associator given a filter with a map of its own numbers new landmarks past it."""
+    f = seif.make_filter("ekf", np.zeros(3), seif.paper_filter_config(seif.NoiseModel()))
+    f.update([seif.Observation(0, np.array([1.0, 0.0]))])  # the caller's landmark 0
+    options = seif.AssociationOptions()
+    options.method = seif.AssociationMethod.NearestNeighbour
+    options.confirm = 1
+    associator = seif.Associator(options)
+    out = associator.associate(f, 0, [seif.Observation(9, np.array([5.0, 1.5]))])  # far from it
+    assert [z.landmark for z in out] == [1]
+    f.update(out)
+    assert f.landmark_ids() == [0, 1]
+    np.testing.assert_allclose(f.landmark(0), [1.0, 0.0], atol=1e-9)

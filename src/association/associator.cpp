@@ -360,7 +360,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     spread[i] = 0.5 * (V + V.transpose());
     const double lmax = Eigen::SelfAdjointEigenSolver<Mat2>(0.5 * (W + W.transpose()), Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
     radius[i] = std::sqrt(s.new_d2 * std::max(0.0, lmax));
-    if (!point[i].allFinite() || !std::isfinite(radius[i])) {
+    if (!point[i].allFinite() || !std::isfinite(lmax) || !std::isfinite(radius[i])) {  // max(0, NaN) is 0
       throw ModelError("association: observation " + std::to_string(i) + " has no finite position in the map");
     }
   }
@@ -468,6 +468,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
         if (++p->second.sightings >= s.options.confirm) s.provisional.erase(p);
       }
     } else if (nearest[i] > s.new_d2) {
+      while (filter.hasLandmark(s.next_id)) ++s.next_id;  // ids the filter held before (a caller's map)
       z.landmark = s.next_id++;
       ++s.counts.new_landmarks;
       if (s.options.confirm > 1) {
