@@ -4,7 +4,7 @@
 //   trajectory.tum  the filter's poses (TUM: t x y z qx qy qz qw)
 //   dead_reckoning.tum  the controls integrated alone from the same start, at the same stamps
 //   map.csv         id, x, y and the landmark's 2x2 marginal covariance
-//   metrics.json    timing, structure, errors (keys in docs/outputs.md and below)
+//   metrics.json    timing, structure, errors (its keys: RunReport below; "interrupted" when stopped)
 //   gps.csv         time, x, y of the dataset's GPS fixes, when it has any
 //   trajectory_filter.tum, map_filter.csv  with `smooth`: the filter's, before the batch
 // Errors: ATE and map error against ground truth when the dataset has it (after the best
