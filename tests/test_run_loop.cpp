@@ -75,6 +75,14 @@ struct World {
   }
 };
 
+/// A filter with the models of a streamed source, from its start pose.
+std::unique_ptr<SlamFilter> streamedFilter(const std::string& name, const EventSource& source) {
+  FilterConfig config;
+  config.motion = source.info().motion;
+  config.sensor = source.info().sensor;
+  return makeFilter(name, source.info().start_pose, config);
+}
+
 RunLoopOptions resumingAt(std::size_t step) {
   RunLoopOptions options;
   options.start_step = step;
@@ -120,15 +128,12 @@ TEST(RunLoop, InMemoryAndStreamedRunsAreRunFiltersRuns) {
     EXPECT_EQ(looped->landmarkIds(), reference->landmarkIds());
 
     RobotLogSource source(w.log, w.data.noise.value_or(NoiseModel{}));
-    FilterConfig config;
-    config.motion = source.info().motion;
-    config.sensor = source.info().sensor;
-    auto streamed = makeFilter(name, source.info().start_pose, config);
+    auto streamed = streamedFilter(name, source);
     Recorder stream;
     StepAssembler steps;
     runLoop(*streamed, source, steps, {&stream});
     RobotLogSource again(w.log, w.data.noise.value_or(NoiseModel{}));
-    auto streamed_reference = makeFilter(name, again.info().start_pose, config);
+    auto streamed_reference = streamedFilter(name, again);
     const RunOutput streamed_out = runFilter(*streamed_reference, again);
     expectSamePoses(stream.poses, streamed_out.trajectory);
     EXPECT_EQ(streamed->mean(), streamed_reference->mean()) << name;
@@ -157,10 +162,7 @@ TEST(RunLoop, StartStepSkipsTheFirstStepsAndResumesWhereARunStopped) {
 
   // Streamed: the assembler still makes the skipped steps, the filter never sees them.
   RobotLogSource source(w.log, w.data.noise.value_or(NoiseModel{}));
-  FilterConfig config;
-  config.motion = source.info().motion;
-  config.sensor = source.info().sensor;
-  auto streamed = makeFilter("seif", source.info().start_pose, config);
+  auto streamed = streamedFilter("seif", source);
   runLoop(*streamed, head, {});
   Recorder streamed_rest;
   StepAssembler steps;
@@ -202,10 +204,7 @@ TEST(RunLoop, AStopEndsTheRunBeforeItsNextStepAndStillFinishesIt) {
   // Streamed: the same, and nothing the stream carries after the last step run is handed on.
   stop.store(false);
   RobotLogSource source(w.log, w.data.noise.value_or(NoiseModel{}));
-  FilterConfig config;
-  config.motion = source.info().motion;
-  config.sensor = source.info().sensor;
-  auto streamed = makeFilter("seif", source.info().start_pose, config);
+  auto streamed = streamedFilter("seif", source);
   Recorder stream;
   StepAssembler steps;
   EXPECT_EQ(runLoop(*streamed, source, steps, {&stopper, &stream}, options), k);
