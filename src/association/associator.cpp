@@ -69,7 +69,9 @@ double correspondenceDistance(const SlamFilter& filter, int a, int b, MarginalMo
 namespace {
 
 /// A uniform grid of landmark positions: insert, move, remove and a disc query, each
-/// O(landmarks in the cells touched).
+/// O(landmarks in the cells touched). Each landmark carries a spread: the standard deviation
+/// of its mean along its worst axis when last known (sqrt(lambda_max(Sigma_yy))), which a
+/// query adds, scaled, to its radius.
 class LandmarkGrid {
  public:
   void setCell(double cell) { cell_ = cell; }
@@ -79,31 +81,46 @@ class LandmarkGrid {
     const auto it = where_.find(id);
     const std::int64_t key = keyOf(y);
     if (it != where_.end()) {
-      if (it->second.key == key) {
-        it->second.y = y;
-        return;
+      if (it->second.key != key) {
+        erase(it->second.key, id);
+        cells_[key].push_back(id);
+        it->second.key = key;
       }
-      erase(it->second.key, id);
+      it->second.y = y;
+      return;
     }
     cells_[key].push_back(id);
     where_[id] = {key, y};
   }
+  /// The landmark's spread (kept until remove(), put() or not).
+  void setSpread(int id, double sigma) {
+    spread_[id] = sigma;
+    spread_[id] = sigma;
+    max_spread_ = std::max(max_spread_, sigma);
+  }
   void remove(int id) {
+    spread_.erase(id);
     const auto it = where_.find(id);
     if (it == where_.end()) return;
     erase(it->second.key, id);
     where_.erase(it);
   }
-  /// Ids indexed within `radius` of `c` (at their indexed positions).
-  void query(const Vec2& c, double radius, std::vector<int>& out) const {
+  double spread(int id) const {
+    const auto it = spread_.find(id);
+    return it != spread_.end() ? it->second : 0.0;
+  }
+  /// Ids indexed within `radius + scale * spread` of `c` (at their indexed positions).
+  void query(const Vec2& c, double radius, double scale, std::vector<int>& out) const {
     out.clear();
-    const auto lo = cellOf(c - Vec2::Constant(radius)), hi = cellOf(c + Vec2::Constant(radius));
+    const double reach = radius + scale * max_spread_;
+    const auto lo = cellOf(c - Vec2::Constant(reach)), hi = cellOf(c + Vec2::Constant(reach));
     for (std::int64_t i = lo.first; i <= hi.first; ++i) {
       for (std::int64_t j = lo.second; j <= hi.second; ++j) {
         const auto it = cells_.find(pack(i, j));
         if (it == cells_.end()) continue;
         for (int id : it->second) {
-          if ((where_.at(id).y - c).squaredNorm() <= radius * radius) out.push_back(id);
+          const double r = radius + scale * spread(id);
+          if ((where_.at(id).y - c).squaredNorm() <= r * r) out.push_back(id);
         }
       }
     }
@@ -129,9 +146,18 @@ class LandmarkGrid {
     if (v.empty()) cells_.erase(key);
   }
   double cell_ = 0.0;
+  double max_spread_ = 0.0;  // the largest spread set (never lowered: a wider query only costs time)
   std::unordered_map<std::int64_t, std::vector<int>> cells_;
   std::unordered_map<int, Entry> where_;
+  std::unordered_map<int, double> spread_;
 };
+
+/// sqrt(lambda_max) of a 2x2 covariance, in closed form.
+double worstSigma(const Mat2& C) {
+  const double a = C(0, 0), d = C(1, 1), b = 0.5 * (C(0, 1) + C(1, 0));
+  const double half = 0.5 * (a + d), gap = std::sqrt(0.25 * (a - d) * (a - d) + b * b);
+  return std::sqrt(std::max(0.0, half + gap));
+}
 
 struct Provisional {
   std::size_t born = 0;  // the scan (Impl::scans) that started it
@@ -161,6 +187,7 @@ struct Associator::Impl {
   std::unordered_map<int, int> label;  // set by finish()
   std::unordered_map<int, Provisional> provisional;
   std::vector<int> touched;  // landmarks to re-index at the next scan
+  std::vector<int> started;  // landmarks the last scan started in the filter
   std::size_t refresh_cursor = 0;
   std::size_t scans = 0;  // steps with observations so far
   std::vector<double> joint_gates;  // JCBB's chi-square(2k) gates (ScanProblem::joint_gates)
@@ -190,7 +217,16 @@ struct Associator::Impl {
     return best;
   }
 
+  /// Re-indexes the landmarks observed last scan and `refresh` others (cyclically), then
+  /// merges duplicates among those observed last scan. A landmark's indexed mean and its
+  /// spread are both from a scan that offered it (or started it), so a later move of its mean
+  /// within its covariance - a loop closure - still leaves it in reach; the slack covers
+  /// moves beyond what the covariance claimed.
   void refreshIndex(SlamFilter& filter) {
+    if (!grid.ready()) {
+      touched.clear();
+      return;
+    }
     for (int id : touched) {
       if (filter.hasLandmark(id)) {
         grid.put(id, filter.landmark(id));
@@ -198,14 +234,14 @@ struct Associator::Impl {
         grid.put(id, p->second.mean);
       }
     }
-    mergeDuplicates(filter, touched);
-    touched.clear();
     const auto& ids = filter.landmarkIds();
     const std::size_t n = std::min<std::size_t>(ids.size(), static_cast<std::size_t>(std::max(0, options.refresh)));
     for (std::size_t r = 0; r < n; ++r) {
       refresh_cursor = (refresh_cursor + 1) % ids.size();
       grid.put(ids[refresh_cursor], filter.landmark(ids[refresh_cursor]));
     }
+    mergeDuplicates(filter, touched);
+    touched.clear();
   }
 
   /// Merges every landmark observed last scan into an older one nearby that the
@@ -221,7 +257,9 @@ struct Associator::Impl {
     };
     for (int id : last_scan) {
       if (!filter.hasLandmark(id)) continue;
-      grid.query(filter.landmark(id), slack, near);
+      // Within the merge gate's reach of either mean: sqrt(chi2) (sigma_id + sigma_other).
+      const double scale = std::sqrt(merge_d2);
+      grid.query(filter.landmark(id), slack + scale * grid.spread(id), scale, near);
       for (int other : near) {
         if (other == id || !filter.hasLandmark(other) ||
             std::find(last_scan.begin(), last_scan.end(), other) != last_scan.end()) {
@@ -274,6 +312,19 @@ struct Associator::Impl {
     p.covariance = 0.5 * (C + C.transpose());
   }
 
+  /// The landmarks the last scan started but the filter does not hold: its update failed
+  /// (all or nothing) and the caller went on. They are forgotten as never started.
+  void dropUnapplied(const SlamFilter& filter) {
+    for (int id : started) {
+      if (filter.hasLandmark(id)) continue;
+      grid.remove(id);
+      provisional.erase(id);
+      seen_truths.erase(id);
+      --counts.new_landmarks;
+    }
+    started.clear();
+  }
+
   void expireProvisional(SlamFilter& filter, std::size_t scan) {
     std::vector<int> expired;
     for (const auto& [id, p] : provisional) {
@@ -281,7 +332,7 @@ struct Associator::Impl {
     }
     std::sort(expired.begin(), expired.end());
     for (int id : expired) {
-      if (!provisional.at(id).held) filter.removeLandmark(id);
+      if (!provisional.at(id).held && filter.hasLandmark(id)) filter.removeLandmark(id);
       forget(id);
       ++counts.provisional_removed;
     }
@@ -337,6 +388,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     z.landmark = kUnknownLandmark;
   }
   s.counts.observations += observations.size();
+  s.dropUnapplied(filter);
   s.refreshIndex(filter);
   if (observations.empty()) return;  // a step without a scan: nothing to associate, no scan counted
   ++s.scans;
@@ -351,6 +403,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   std::vector<Mat2> spread(observations.size());  // the point's covariance given the pose
   std::vector<Mat23> lever(observations.size());  // the point's Jacobian in the pose
   std::vector<double> radius(observations.size());
+  std::vector<double> sigma(observations.size());  // sqrt(lambda_max) of the point's covariance
   for (std::size_t i = 0; i < observations.size(); ++i) {
     Mat23& J_x = lever[i];
     Mat2 J_z;
@@ -359,7 +412,8 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     const Mat2 V = J_z * sensor.noise(observations[i]) * J_z.transpose();
     spread[i] = 0.5 * (V + V.transpose());
     const double lmax = Eigen::SelfAdjointEigenSolver<Mat2>(0.5 * (W + W.transpose()), Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
-    radius[i] = std::sqrt(s.new_d2 * std::max(0.0, lmax));
+    sigma[i] = std::sqrt(std::max(0.0, lmax));
+    radius[i] = std::sqrt(s.new_d2) * sigma[i];
     if (!point[i].allFinite() || !std::isfinite(lmax) || !std::isfinite(radius[i])) {  // max(0, NaN) is 0
       throw ModelError("association: observation " + std::to_string(i) + " has no finite position in the map");
     }
@@ -370,6 +424,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     if (r0 > 0.0) {
       s.slack = s.options.slack > 0.0 ? s.options.slack : r0;
       s.grid.setCell(2.0 * r0 + s.slack);
+      for (int id : filter.landmarkIds()) s.grid.put(id, filter.landmark(id));  // a map the filter started with
     }
   }
 
@@ -389,7 +444,9 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   std::vector<std::vector<int>> found(observations.size());
   std::vector<int> ids, held;
   for (std::size_t i = 0; i < observations.size() && s.grid.ready(); ++i) {
-    s.grid.query(point[i], radius[i] + s.slack, found[i]);
+    // The observed point's reach plus each landmark's own: the difference of the two has a
+    // standard deviation of at most the sum of theirs along any axis.
+    s.grid.query(point[i], radius[i] + s.slack, std::sqrt(s.new_d2), found[i]);
     for (int id : found[i]) {
       const auto p = s.provisional.find(id);
       std::vector<int>& list = p != s.provisional.end() && p->second.held ? held : ids;
@@ -397,7 +454,11 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     }
   }
   scan.joint = ids.empty() ? pose : filter.marginal(ids, true, s.options.marginal);
-  for (std::size_t j = 0; j < ids.size(); ++j) scan.column[ids[j]] = 3 + 2 * static_cast<Eigen::Index>(j);
+  for (std::size_t j = 0; j < ids.size(); ++j) {
+    const Eigen::Index r = 3 + 2 * static_cast<Eigen::Index>(j);
+    scan.column[ids[j]] = r;
+    s.grid.setSpread(ids[j], worstSigma(scan.joint.covariance.block<2, 2>(r, r)));
+  }
   if (!held.empty()) {
     // Rows of y = mean + lever e_x + e: Cov(y, .) = lever Cov(x, .), Cov(y) = lever P_xx lever^T + C.
     const Eigen::Index n0 = scan.joint.mean.size(), n = n0 + 2 * static_cast<Eigen::Index>(held.size());
@@ -416,6 +477,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
       scan.joint.mean.segment<2>(r) = p.mean;
       P.block<2, 2>(r, r) += p.covariance;
       scan.column[held[j]] = r;
+      s.grid.setSpread(held[j], worstSigma(P.block<2, 2>(r, r)));
     }
   }
   for (std::size_t i = 0; i < observations.size(); ++i) {
@@ -476,6 +538,8 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
         s.provisional[z.landmark] = Provisional{s.scans, 1, hold, point[i], spread[i], lever[i]};
         apply = !hold;
       }
+      if (apply) s.started.push_back(z.landmark);
+      s.grid.setSpread(z.landmark, sigma[i]);  // its covariance is the point's
     } else {
       ++s.counts.ambiguous_dropped;
       continue;
@@ -490,6 +554,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
 
 void Associator::finish(SlamFilter& filter) {
   Impl& s = *impl_;
+  s.dropUnapplied(filter);
   AssociationCounts& c = s.counts;
   // Landmarks still provisional were not confirmed: the final map holds confirmed ones only
   // (a smoother, which cannot remove, keeps them and counts them).
@@ -507,7 +572,7 @@ void Associator::finish(SlamFilter& filter) {
       ++c.provisional_final;
       continue;
     }
-    filter.removeLandmark(id);
+    if (filter.hasLandmark(id)) filter.removeLandmark(id);
     s.forget(id);
     ++c.provisional_removed;
   }
@@ -517,7 +582,11 @@ void Associator::finish(SlamFilter& filter) {
   c.spurious_landmarks = c.duplicate_landmarks = 0;
   s.label.clear();
   std::unordered_set<int> labelled;
-  for (int id : filter.landmarkIds()) {  // map order: the older landmark keeps a shared label
+  // The older landmark (the smaller id) keeps a shared label; the map's order is not the
+  // landmarks' age once removals have moved slots.
+  std::vector<int> by_age = filter.landmarkIds();
+  std::sort(by_age.begin(), by_age.end());
+  for (int id : by_age) {
     const int label = s.majority(id);
     const bool duplicate = label >= 0 && !labelled.insert(label).second;
     s.label[id] = label;

@@ -2,7 +2,11 @@
 // over the observations, each paired with one of its individually compatible landmarks or
 // with none; a pairing is kept only if the joint innovation of the whole hypothesis passes
 // the chi-square(2k) gate - tested at every node, not only at the leaves - and a branch is
-// cut when it cannot pair more observations than the best hypothesis found. The joint
+// cut when it cannot pair more observations than the best hypothesis found (among the
+// hypotheses reached with as many, the smaller joint distance wins). The observations are
+// searched in the order of their nearest candidate's distance, so the answer does not depend
+// on the order the sensor listed them in, and where two hypotheses tie in pairings the
+// observation that fits best keeps its pairing. The joint
 // innovation covariance S_H = J_H Sigma J_H^T + R_H uses one joint marginal Sigma of the
 // pose and every candidate of the scan; its Cholesky factor grows by one 2x2 block per
 // pairing (O(k^2) per node).
@@ -11,19 +15,20 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace seif {
 
 double chiSquareEvenQuantile(double p, int k) {
-  // CDF of chi-square(2k): 1 - exp(-x/2) sum_{i<k} (x/2)^i / i!
+  // CDF of chi-square(2k): 1 - sum_{i<k} exp(-x/2) (x/2)^i / i!, each term in logs (the
+  // product of exp(-h) and the sum overflows or underflows beyond h of about 700).
   const auto cdf = [k](double x) {
     const double h = 0.5 * x;
-    double term = 1.0, sum = 1.0;
-    for (int i = 1; i < k; ++i) {
-      term *= h / i;
-      sum += term;
-    }
-    return 1.0 - std::exp(-h) * sum;
+    if (h <= 0.0) return 0.0;
+    const double log_h = std::log(h);
+    double upper = 0.0;
+    for (int i = 0; i < k; ++i) upper += std::exp(-h + i * log_h - std::lgamma(i + 1.0));
+    return 1.0 - upper;
   };
   double lo = 0.0, hi = 2.0 * k + 10.0;
   while (cdf(hi) < p) hi *= 2.0;
@@ -70,6 +75,12 @@ class Search {
       std::sort(candidates_[i].begin(), candidates_[i].end(),
                 [](const Candidate& a, const Candidate& b) { return a.pairing.d2 < b.pairing.d2; });
     }
+    // Search order: by the nearest candidate's distance (none: last), then as listed.
+    const auto nearest = [](const std::vector<Candidate>& list) {
+      return list.empty() ? std::numeric_limits<double>::infinity() : list.front().pairing.d2;
+    };
+    std::stable_sort(candidates_.begin(), candidates_.end(),
+                     [&](const auto& a, const auto& b) { return nearest(a) < nearest(b); });
     // gates[k]: the chi-square(2k) quantile, computed once per k over the run
     std::vector<double>& gates = *scan.joint_gates;
     for (std::size_t k = gates.size(); k <= m; ++k) {
@@ -85,22 +96,28 @@ class Search {
     L_ = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(m), 2 * static_cast<Eigen::Index>(m));
     y_ = Eigen::VectorXd::Zero(2 * static_cast<Eigen::Index>(m));
     recurse(0, 0, 0.0);
-    if (truncated) *truncated = nodes_ >= max_nodes_;
+    if (truncated) *truncated = truncated_;
     return best_;
   }
 
  private:
   // Depth-first over observation i with k pairings so far (their factor in L_, y_) and
-  // joint distance d2.
+  // joint distance d2. A node is cut when the rest cannot beat the best hypothesis: fewer
+  // pairings, or as many at no smaller distance (pairing more only adds to d2).
   void recurse(std::size_t i, int k, double d2) {
-    if (++nodes_ > max_nodes_) return;
     const std::size_t m = candidates_.size();
+    const int most = k + static_cast<int>(m - i);
+    if (most < best_pairings_ || (most == best_pairings_ && d2 >= best_d2_)) return;  // offer() would refuse all
+    if (nodes_ >= max_nodes_) {
+      // The bound: the hypothesis so far (jointly compatible, the rest unpaired) competes
+      // with the best found, so even a bound below the depth of one dive answers.
+      truncated_ = true;
+      offer(k, d2);
+      return;
+    }
+    ++nodes_;
     if (i == m) {
-      if (k > best_pairings_ || (k == best_pairings_ && d2 < best_d2_)) {
-        best_pairings_ = k;
-        best_d2_ = d2;
-        for (std::size_t o = 0; o < m; ++o) best_[o] = chosen_[o] ? chosen_[o]->pairing.landmark : -1;
-      }
+      offer(k, d2);
       return;
     }
     for (const Candidate& c : candidates_[i]) {
@@ -110,10 +127,23 @@ class Search {
       chosen_[i] = &c;
       recurse(i + 1, k + 1, d2_new);
       chosen_[i] = nullptr;
-      if (nodes_ > max_nodes_) return;
+      if (truncated_) return;
     }
-    // Leave observation i unpaired only if the rest could still beat the best.
+    // Leave observation i unpaired only if the rest could still pair more than the best.
     if (k + static_cast<int>(m - i - 1) > best_pairings_) recurse(i + 1, k, d2);
+  }
+
+  /// The hypothesis in chosen_ (k pairings, joint distance d2) becomes the best if it has
+  /// more pairings, or as many at a smaller distance.
+  void offer(int k, double d2) {
+    if (k > best_pairings_ || (k == best_pairings_ && d2 < best_d2_)) {
+      best_pairings_ = k;
+      best_d2_ = d2;
+      std::fill(best_.begin(), best_.end(), -1);
+      for (const Candidate* c : chosen_) {
+        if (c) best_[static_cast<std::size_t>(c->pairing.observation)] = c->pairing.landmark;
+      }
+    }
   }
 
   bool used(int landmark, std::size_t i) const {
@@ -161,8 +191,9 @@ class Search {
   std::vector<const Candidate*> chosen_;
   std::vector<int> best_;
   int best_pairings_ = -1;
-  double best_d2_ = 0.0;
+  double best_d2_ = std::numeric_limits<double>::infinity();
   std::size_t nodes_ = 0;
+  bool truncated_ = false;  // the node bound refused a node
   Eigen::MatrixXd L_;
   Eigen::VectorXd y_;
 };

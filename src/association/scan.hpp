@@ -38,7 +38,8 @@ struct ScanProblem {
 std::vector<int> assignNearestNeighbour(const ScanProblem& scan);
 /// jcbb: the hypothesis with the most pairings (ties: the smallest joint distance) whose
 /// joint innovation passes the chi-square(2k) gate, searched depth first at most
-/// `max_nodes` nodes (*truncated set when the bound stopped it).
+/// `max_nodes` nodes. When the bound stops the search (*truncated), the best hypothesis
+/// found so far is returned, partial ones (a dive cut short) included.
 std::vector<int> assignJcbb(const ScanProblem& scan, std::size_t max_nodes, bool* truncated);
 
 /// The p-quantile of chi-square with 2k degrees of freedom (closed-form CDF, bisection).
