@@ -26,8 +26,7 @@ void addConvertCommand(CLI::App& app) {
   cmd->add_option("--to", args->to, "output format: g2o or isam")->required()->check(CLI::IsMember({"g2o", "isam"}));
   cmd->add_option("--out", args->out, "output file")->required();
   cmd->callback([args] {
-    convertDataset(args->in, parseDatasetFormat(args->format), args->out,
-                   args->to == "g2o" ? GraphFormat::G2o : GraphFormat::Isam);
+    convertDataset(args->in, parseDatasetFormat(args->format), args->out, parseGraphFormat(args->to));
     std::printf("wrote %s (%s)\n", args->out.c_str(), args->to.c_str());
   });
 }

@@ -38,7 +38,7 @@ def _reduce_filter(self):
 
 def _save_filter(self, path, steps_consumed=0, values=None):
     """Saves the filter's whole state to the checkpoint ``path``; ``seif.load(path)`` reads it."""
-    _core.save_checkpoint(self, str(path), steps_consumed, values or {})
+    _core.save_checkpoint(self, path, steps_consumed, values or {})
 
 
 _core.SlamFilter.__reduce__ = _reduce_filter
@@ -50,6 +50,7 @@ __all__ = [name for name in dir(_core) if not name.startswith("_")] + [
     "run",
     "read_tum",
     "read_map_csv",
+    "plot_run",
 ]
 
 
@@ -103,3 +104,34 @@ def read_tum(path):
 def read_map_csv(path):
     """``map.csv`` as a structured numpy array with its header's column names (id, x, y, ...)."""
     return _np.genfromtxt(path, delimiter=",", names=True, ndmin=1)
+
+
+def plot_run(run_dir, title=None):
+    """``seif plot``: draws the output folder of a run (``seif run`` or ``run_dataset``) into
+    ``run_dir/map.png`` and returns its path: the trajectory, the map with each landmark's 95 %
+    covariance ellipse, the dead reckoning and, when the run stored GPS (``gps.csv``), the
+    fixes with the trajectory and map rigidly aligned to them. Rendered by the package's
+    ``run_map.py`` (the CLI's script) with this interpreter and matplotlib; ``DataError``
+    when a file the figure needs is missing, ``RuntimeError`` when drawing fails."""
+    import pathlib
+    import subprocess
+    import sys
+
+    run_dir = pathlib.Path(run_dir)
+    for name in ("trajectory.tum", "map.csv"):
+        if not (run_dir / name).is_file():
+            error = DataError(f"{run_dir / name}: missing: run_dir must be the output folder of a run")
+            error.file, error.line = str(run_dir / name), 0
+            raise error
+    png = run_dir / "map.png"
+    args = [sys.executable, str(pathlib.Path(__file__).with_name("run_map.py")), str(png), "--ellipses"]
+    if (run_dir / "gps.csv").is_file():
+        args += ["--gps", str(run_dir / "gps.csv")]
+    if title:
+        args += ["--title", title]
+    done = subprocess.run(args + [str(run_dir)], capture_output=True, text=True)
+    if done.returncode == 3:
+        raise RuntimeError("plot_run: matplotlib is not installed (apt-get install python3-matplotlib)")
+    if done.returncode != 0:
+        raise RuntimeError(f"plot_run: {png} was not drawn: {done.stderr.strip()}")
+    return png

@@ -9,7 +9,7 @@ namespace seif::python {
 void bindCheckpoints(py::module_& m) {
   m.def(
       "save_checkpoint",
-      [](const SlamFilter& filter, const std::string& path, std::uint64_t steps_consumed,
+      [](const SlamFilter& filter, const std::filesystem::path& path, std::uint64_t steps_consumed,
          const std::map<std::string, std::string>& values) {
         saveCheckpoint(filter, path, CheckpointExtras{steps_consumed, values});
       },
@@ -20,11 +20,11 @@ void bindCheckpoints(py::module_& m) {
       "filter continues bit-identically. The batch MAP cannot be saved (InvalidArgument).");
   m.def(
       "load",
-      [](const std::string& path) { return load(path); }, py::arg("path"),
+      [](const std::filesystem::path& path) { return load(path); }, py::arg("path"),
       "The filter saved in the checkpoint `path` (DataError, naming the file, for anything else).");
   m.def(
       "load_checkpoint",
-      [](const std::string& path) {
+      [](const std::filesystem::path& path) {
         CheckpointExtras extras;
         std::unique_ptr<SlamFilter> filter = load(path, &extras);
         return py::make_tuple(std::move(filter), extras.steps_consumed, extras.values);

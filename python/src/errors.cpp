@@ -11,6 +11,7 @@
 
 #include <seif/core/errors.hpp>
 
+#include <cstring>
 #include <stdexcept>
 
 namespace seif::python {
@@ -31,9 +32,13 @@ PyObject* newException(py::module_& m, const char* name, py::tuple bases, const 
   return type;
 }
 
-/// Raises `type` with message `what`; `attrs` are set on the instance.
+/// Raises `type` with message `what`; `attrs` are set on the instance. The message is UTF-8
+/// decoded with bytes that are not (a path's, say) shown as \xNN escapes.
 void raise(PyObject* type, const char* what, std::initializer_list<std::pair<const char*, py::object>> attrs = {}) {
-  py::object instance = py::reinterpret_steal<py::object>(PyObject_CallFunction(type, "s", what));
+  py::object message = py::reinterpret_steal<py::object>(
+      PyUnicode_DecodeUTF8(what, static_cast<Py_ssize_t>(std::strlen(what)), "backslashreplace"));
+  if (!message) throw py::error_already_set();
+  py::object instance = py::reinterpret_steal<py::object>(PyObject_CallOneArg(type, message.ptr()));
   if (!instance) throw py::error_already_set();
   for (const auto& [name, value] : attrs) instance.attr(name) = value;
   PyErr_SetObject(type, instance.ptr());
@@ -45,7 +50,11 @@ void translate(std::exception_ptr p) {
   try {
     std::rethrow_exception(p);
   } catch (const DataError& e) {
-    raise(g_data_error, e.what(), {{"file", py::str(e.file())}, {"line", py::int_(e.line())}});
+    // The file as os.fsdecode gives it: a path that is not UTF-8 round-trips (os.fsencode).
+    py::object file = py::reinterpret_steal<py::object>(
+        PyUnicode_DecodeFSDefaultAndSize(e.file().data(), static_cast<Py_ssize_t>(e.file().size())));
+    if (!file) throw py::error_already_set();
+    raise(g_data_error, e.what(), {{"file", file}, {"line", py::int_(e.line())}});
   } catch (const NumericError& e) {
     raise(g_numeric_error, e.what());
   } catch (const InvalidArgument& e) {  // ModelError included

@@ -531,6 +531,11 @@ void bindConsistency(py::module_& m) {
       "filter.posterior_mean()) with its covariances");
   m.def("consistency_json", &consistencyJson, py::arg("result"), py::arg("options"));
   m.def("consistency_table", &consistencyTable, py::arg("result"));
+  m.def("consistency_csv", &consistencyCsv, py::arg("result"),
+        "nees.csv of `seif consistency`: one row per sampled step, each filter's NEES and band.");
+  m.def("write_consistency_results", &writeConsistencyResults, py::arg("result"), py::arg("options"), py::arg("dir"),
+        "Writes dir/nees.json, nees.csv and table.md, as `seif consistency` does (figures: "
+        "scripts/figures/consistency.py dir).");
 }
 
 void bindBench(py::module_& m) {
@@ -603,6 +608,67 @@ void bindBench(py::module_& m) {
         return estimateBenchCase(filter, landmarks, steps, measured);
       },
       py::arg("filter"), py::arg("landmarks"), py::arg("steps"), py::arg("measured"));
+
+  // The whole study: `seif bench` as one call.
+  py::class_<BenchRequest>(m, "BenchRequest", "`seif bench` as one call (run_bench); the CLI's defaults.")
+      .def(py::init<>())
+      .def_readwrite("filters", &BenchRequest::filters, py::return_value_policy::copy)
+      .def_readwrite("landmarks", &BenchRequest::landmarks, py::return_value_policy::copy)
+      .def_readwrite("window", &BenchRequest::window)
+      .def_readwrite("repeat", &BenchRequest::repeat, "runs per case, each in its own forked child; the lowest median is reported")
+      .def_readwrite("world_seed", &BenchRequest::world_seed)
+      .def_readwrite("max_seconds", &BenchRequest::max_seconds, "time budget of all runs of one case")
+      .def_readwrite("max_memory_gb", &BenchRequest::max_memory_gb, "memory budget of one case")
+      .def_readwrite("linearization", &BenchRequest::linearization)
+      .def_readwrite("iterations", &BenchRequest::iterations)
+      .def_readwrite("seif", &BenchRequest::seif)
+      .def_readwrite("association", &BenchRequest::association);
+  py::class_<BenchRow>(m, "BenchRow", "One (filter, N) of the study: measured, or skipped with the reason.")
+      .def_readonly("filter", &BenchRow::filter)
+      .def_readonly("landmarks", &BenchRow::landmarks)
+      .def_readonly("measurement", &BenchRow::measurement, py::return_value_policy::copy)
+      .def_readonly("repeat_medians", &BenchRow::repeat_medians, py::return_value_policy::copy)
+      .def_readonly("estimate", &BenchRow::estimate, py::return_value_policy::copy)
+      .def_readonly("skipped", &BenchRow::skipped)
+      .def("__repr__", [](const BenchRow& r) {
+        return "BenchRow(" + r.filter + ", " + std::to_string(r.landmarks) +
+               (r.measurement ? ", " + std::to_string(r.measurement->us_per_step_median) + " us/step" : ", skipped: " + r.skipped) + ")";
+      });
+  py::class_<BenchTargets::Growth>(m, "BenchGrowth")
+      .def_readonly("from_landmarks", &BenchTargets::Growth::from_landmarks)
+      .def_readonly("to_landmarks", &BenchTargets::Growth::to_landmarks)
+      .def_readonly("from_us", &BenchTargets::Growth::from_us)
+      .def_readonly("to_us", &BenchTargets::Growth::to_us)
+      .def_readonly("ratio", &BenchTargets::Growth::ratio)
+      .def_readonly("met", &BenchTargets::Growth::met);
+  py::class_<BenchTargets::Speedup>(m, "BenchSpeedup")
+      .def_readonly("landmarks", &BenchTargets::Speedup::landmarks)
+      .def_readonly("ekf_us", &BenchTargets::Speedup::ekf_us)
+      .def_readonly("seif_us", &BenchTargets::Speedup::seif_us)
+      .def_readonly("ratio", &BenchTargets::Speedup::ratio)
+      .def_readonly("met", &BenchTargets::Speedup::met);
+  py::class_<BenchTargets>(m, "BenchTargets")
+      .def_readonly("seif_growth", &BenchTargets::seif_growth, py::return_value_policy::copy)
+      .def_readonly("seif_association_growth", &BenchTargets::seif_association_growth, py::return_value_policy::copy)
+      .def_readonly("ekf_over_seif", &BenchTargets::ekf_over_seif, py::return_value_policy::copy)
+      .def_readonly("seif_bytes_per_landmark", &BenchTargets::seif_bytes_per_landmark, py::return_value_policy::copy);
+  py::class_<BenchReport>(m, "BenchReport")
+      .def_readonly("request", &BenchReport::request, py::return_value_policy::copy)
+      .def_readonly("rows", &BenchReport::rows, py::return_value_policy::copy)
+      .def_readonly("calibration", &BenchReport::calibration, py::return_value_policy::copy)
+      .def_readonly("targets", &BenchReport::targets, py::return_value_policy::copy)
+      .def("json", [](const BenchReport& r) { return benchJson(r); }, "bench.json of `seif bench`");
+  m.def(
+      "run_bench",
+      [](const BenchRequest& request, const py::object& row_done) {
+        const auto callback = pythonCallback<const BenchRow&>(row_done);
+        py::gil_scoped_release release;
+        return runBench(request, callback);
+      },
+      py::arg("request"), py::arg("row_done") = py::none(),
+      "`seif bench` as one call: every (filter, N) measured in forked children; row_done(row) follows "
+      "each case, measured or skipped. Returns a BenchReport (.json() is bench.json).");
+  m.def("bench_json", &benchJson, py::arg("report"));
 }
 
 }  // namespace

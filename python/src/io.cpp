@@ -3,6 +3,7 @@
 #include "bindings.hpp"
 
 #include <seif/io/event_source.hpp>
+#include <seif/io/graph_file.hpp>
 #include <seif/io/mrclam.hpp>
 #include <seif/io/results.hpp>
 #include "io/robot_log_source.hpp"
@@ -106,6 +107,17 @@ void bindSources(py::module_& m) {
       "Opens a dataset (MRCLAM folder, Victoria Park folder, iSAM or g2o file) as an EventSource; "
       "format 'auto' tells them apart. Raises DataError ('file:line: what') for bad input.");
   m.def("looks_like_victoria_park", &looksLikeVictoriaPark, py::arg("path"));
+  bindNamedEnum<GraphFormat>(m, "GraphFormat", "'isam' | 'g2o'", &parseGraphFormat, &graphFormatName)
+      .value("Isam", GraphFormat::Isam)
+      .value("G2o", GraphFormat::G2o);
+  m.def(
+      "convert_dataset",
+      [](const std::filesystem::path& input, const std::filesystem::path& output, GraphFormat to,
+         DatasetFormat input_format) { convertDataset(input, input_format, output, to); },
+      py::arg("input"), py::arg("output"), py::arg("to"), py::arg("input_format") = DatasetFormat::Auto,
+      py::call_guard<py::gil_scoped_release>(),
+        "`seif convert`: a dataset (an odometry stream with pose ids: iSAM or g2o) written as a graph file "
+        "of format `to` (iSAM or g2o); DataError for anything else.");
 
   m.def("read_mrclam", py::overload_cast<const std::filesystem::path&, int>(&readMrclam), py::arg("dir"),
         py::arg("robot") = 1, "Reads one robot of an MRCLAM folder into a RobotLog.");

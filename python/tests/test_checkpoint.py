@@ -34,7 +34,7 @@ def test_resumed_filter_is_bit_identical(paper_world, spec, how, tmp_path):
                 f = pickle.loads(pickle.dumps(f))
             else:
                 f.save(tmp_path / "f.ckpt", steps_consumed=k + 1)
-                f = seif.load(str(tmp_path / "f.ckpt"))
+                f = seif.load(tmp_path / "f.ckpt")  # a Path as well as a str
     assert f.name == straight.name
     assert f.landmark_ids() == straight.landmark_ids()
     np.testing.assert_array_equal(f.mean(), straight.mean())

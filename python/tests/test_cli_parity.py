@@ -156,3 +156,65 @@ def test_smooth_python_equals_cli(cli, simulated_folder, tmp_path):
     assert [rms, median] == [py_metrics["filter_before_smoothing"]["trajectory_distance_to_batch"][k] for k in ("rms", "median")]
     assert rms == pytest.approx(np.sqrt(np.mean(gaps**2)), rel=1e-5, abs=1e-6) and rms > 0
     assert median == pytest.approx(np.median(gaps), rel=1e-5, abs=1e-6)
+
+
+def test_convert_python_equals_cli(cli, victoria_park_isam, tmp_path):
+    """seif.convert_dataset writes the bytes `seif convert` writes, both ways."""
+    run_cli(cli, "convert", victoria_park_isam, "--to", "g2o", "--out", tmp_path / "cli.g2o")
+    seif.convert_dataset(victoria_park_isam, tmp_path / "py.g2o", "g2o")
+    assert (tmp_path / "cli.g2o").read_bytes() == (tmp_path / "py.g2o").read_bytes()
+    run_cli(cli, "convert", tmp_path / "cli.g2o", "--to", "isam", "--out", tmp_path / "cli.txt")
+    seif.convert_dataset(tmp_path / "py.g2o", tmp_path / "py.txt", seif.GraphFormat.Isam, input_format="g2o")
+    assert (tmp_path / "cli.txt").read_bytes() == (tmp_path / "py.txt").read_bytes()
+    with pytest.raises(seif.InvalidArgument, match="expected isam or g2o"):
+        seif.GraphFormat("tum")
+
+
+def test_consistency_results_python_equal_cli(cli, tmp_path):
+    """write_consistency_results writes the nees.csv and table.md of `seif consistency`."""
+    run_cli(cli, "consistency", "--preset", "paper", "--landmarks", "20", "--steps", "60", "--runs", "2",
+            "--samples", "4", "--filters", "ekf,seif", "--no-figures", "--out", tmp_path / "cli")
+    options = seif.ConsistencyOptions()
+    options.world = seif.preset_config("paper", 20, 60, 1)
+    options.runs = 2
+    options.samples = 4
+    options.filters = [seif.parse_filter_spec("ekf"), seif.parse_filter_spec("seif")]
+    result = seif.run_consistency(options)
+    (tmp_path / "py").mkdir()
+    seif.write_consistency_results(result, options, tmp_path / "py")
+    for name in ("nees.csv", "table.md"):
+        assert (tmp_path / "cli" / name).read_text() == (tmp_path / "py" / name).read_text(), name
+    assert seif.consistency_csv(result) == (tmp_path / "py" / "nees.csv").read_text()
+    assert json.loads((tmp_path / "py" / "nees.json").read_text())["runs"] == 2
+
+
+def test_bench_study_python_equals_cli(cli, tmp_path):
+    """run_bench is `seif bench`: the same cases, steps and map sizes (the times are measured anew)."""
+    run_cli(cli, "bench", "--filters", "ekf,seif", "--landmarks", "100,200", "--window", "20", "--repeat", "1",
+            "--out", tmp_path)
+    cli_report = json.loads((tmp_path / "bench.json").read_text())
+    request = seif.BenchRequest()
+    request.filters = ["ekf", "seif"]
+    request.landmarks = [100, 200]
+    request.window = 20
+    request.repeat = 1
+    rows = []
+    report = seif.run_bench(request, rows.append)
+    assert [(r.filter, r.landmarks) for r in rows] == [(r.filter, r.landmarks) for r in report.rows]
+    py_report = json.loads(report.json())
+    assert py_report.keys() == cli_report.keys()
+    shape = lambda rs: [(r["filter"], r["landmarks"], r.get("steps"), r.get("map_last")) for r in rs["results"]]
+    assert shape(py_report) == shape(cli_report)
+    assert all(r.measurement is not None and r.measurement.us_per_step_median > 0 for r in report.rows)
+    assert report.targets.seif_growth is not None
+
+
+def test_plot_run_draws_what_seif_plot_draws(cli, simulated_folder, tmp_path):
+    pytest.importorskip("matplotlib")
+    run_cli(cli, "run", "--dataset", simulated_folder, "--filter", "seif", "--out", tmp_path)
+    png = seif.plot_run(tmp_path, title="from Python")
+    assert png == tmp_path / "map.png" and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(seif.DataError, match="map.csv") as e:
+        (tmp_path / "map.csv").unlink()
+        seif.plot_run(tmp_path)
+    assert e.value.file == str(tmp_path / "map.csv")

@@ -1,5 +1,8 @@
 """Every C++ error reaches Python as its seif.Error subclass with the library's message."""
+import os
+
 import numpy as np
+
 import pytest
 
 import seif
@@ -33,6 +36,21 @@ def test_malformed_file_is_data_error_naming_file_and_line(malformed_isam):
     assert message.startswith(f"{malformed_isam}:2: ")
     assert info.value.file == str(malformed_isam)
     assert info.value.line == 2
+
+
+def test_a_path_that_is_not_utf8_is_named_as_the_os_has_it(tmp_path):
+    """The file of a DataError is os.fsdecode's text of the path (it round-trips through
+    os.fsencode); the message shows the bytes that are not UTF-8 as escapes."""
+    folder = os.path.join(os.fsencode(tmp_path), b"caf\xe9")
+    os.mkdir(folder)
+    path = os.path.join(folder, b"bad.txt")
+    with open(path, "w") as f:
+        f.write("ODOMETRY 0 1 1.0 zero 0.0 0.0001 0 0 4e-06 0 4e-06\n")
+    with pytest.raises(seif.DataError) as info:
+        drain(seif.open_dataset(os.fsdecode(path), "isam"))
+    assert os.fsencode(info.value.file) == path
+    assert info.value.line == 1
+    assert "caf\\xe9" in str(info.value)
 
 
 def test_data_error_message_is_the_clis(cli, malformed_isam, tmp_path):

@@ -76,9 +76,9 @@ class GraphSource final : public EventSource {
  public:
   GraphSource(GraphFormat format, TextTable table, TextTable peek, std::size_t bytes, const DatasetOptions& options)
       : format_(format), table_(std::move(table)), bytes_(bytes), gtsam_landmarks_(options.isam_landmarks_as_gtsam) {
-    const char* name = format == GraphFormat::Isam ? "isam" : "g2o";
+    const std::string_view name = graphFormatName(format);
     checkNoiseNames(options, {}, name);
-    if (options.noise_form) throw InvalidArgument(std::string("the ") + name + " format has no noise form: its records carry covariances");
+    if (options.noise_form) throw InvalidArgument("the " + std::string(name) + " format has no noise form: its records carry covariances");
     info_.source = table_.name();
     info_.format = name;
     info_.motion = std::make_shared<OdometryModel>();
@@ -339,6 +339,14 @@ class LineWriter {
 };
 
 }  // namespace
+
+GraphFormat parseGraphFormat(std::string_view name) {
+  if (name == "isam") return GraphFormat::Isam;
+  if (name == "g2o") return GraphFormat::G2o;
+  throw InvalidArgument("unknown graph format '" + std::string(name) + "' (expected isam or g2o)");
+}
+
+std::string_view graphFormatName(GraphFormat format) { return format == GraphFormat::G2o ? "g2o" : "isam"; }
 
 void writeGraph(const std::filesystem::path& file, EventSource& source, GraphFormat format) {
   const bool g2o = format == GraphFormat::G2o;

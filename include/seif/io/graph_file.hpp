@@ -32,6 +32,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <string_view>
 
 namespace seif {
 
@@ -53,6 +54,9 @@ std::unique_ptr<EventSource> openG2oText(const std::string& name, std::string_vi
 /// Throws DataError for a source that is not an odometry stream with pose ids (a graph file),
 /// and for range-bearing observations in g2o (EDGE_SE2_XY is Cartesian).
 enum class GraphFormat { Isam, G2o };
+/// "isam" | "g2o"; throws InvalidArgument for another name.
+GraphFormat parseGraphFormat(std::string_view name);
+std::string_view graphFormatName(GraphFormat format);
 void writeGraph(const std::filesystem::path& file, EventSource& source, GraphFormat format);
 
 /// openDataset(in, in_format) then writeGraph(out, to): `seif convert`.
