@@ -135,3 +135,60 @@ def plot_run(run_dir, title=None):
     if done.returncode != 0:
         raise RuntimeError(f"plot_run: {png} was not drawn: {done.stderr.strip()}")
     return png
+
+
+# ---- pickling of value types: records rebuilt from their fields, models from their parameters
+_CONSTRUCTOR_ARGS = {
+    "VelocityModel": ("sigma_v", "sigma_w", "form"),
+    "AckermannModel": ("geometry", "sigma_speed", "sigma_steering", "form"),
+    "OdometryModel": (),
+    "RangeBearingModel": ("noise", "mount"),
+    "CartesianModel": ("noise", "mount"),
+    "ControlEvent": ("time", "input", "pose"),
+    "Observation": ("landmark", "z", "noise"),
+    "ObservationEvent": ("time", "observations"),
+    "Step": ("time", "u", "observations"),
+}
+
+
+def _rebuild(cls, args, fields):
+    """Unpickling of a value type: cls(*args), then its other fields set."""
+    value = cls(*args)
+    for name, field in fields.items():
+        setattr(value, name, field)
+    return value
+
+
+def _settable_fields(cls):
+    return [name for klass in cls.__mro__ for name, attr in vars(klass).items()
+            if isinstance(attr, property) and attr.fset is not None]
+
+
+def _make_reduce(args, fields):
+    def reduce(self):
+        return (_rebuild, (type(self), tuple(getattr(self, a) for a in args),
+                           {f: getattr(self, f) for f in fields if f not in args}))
+    return reduce
+
+
+def _enable_pickling():
+    """Every record whose fields are all settable (NoiseModel, SeifOptions, RunRequest, Step, ...)
+    and every model pickles by value; a filter pickles as its checkpoint (above)."""
+    for name in dir(_core):
+        cls = getattr(_core, name)
+        if not isinstance(cls, type) or issubclass(cls, BaseException) or "__reduce__" in vars(cls):
+            continue
+        if name in _CONSTRUCTOR_ARGS:
+            cls.__reduce__ = _make_reduce(_CONSTRUCTOR_ARGS[name], _settable_fields(cls))
+            continue
+        props = [a for klass in cls.__mro__ for a in vars(klass).values() if isinstance(a, property)]
+        if not props or any(p.fset is None for p in props):
+            continue
+        try:
+            cls()
+        except TypeError:
+            continue
+        cls.__reduce__ = _make_reduce((), _settable_fields(cls))
+
+
+_enable_pickling()

@@ -231,3 +231,32 @@ def test_keyboard_interrupt_stops_a_run_whole_and_its_checkpoint_resumes(tmp_pat
     assert not report.output.interrupted
     for name in ("trajectory.tum", "dead_reckoning.tum", "map.csv"):
         assert (resumed / name).read_bytes() == (whole / name).read_bytes(), name
+
+
+def test_value_types_pickle_by_value(paper_world):
+    """Records, options and models pickle by value: a run from an unpickled dataset, config and
+    options is bit-identical to one from the originals."""
+    data, world = paper_world
+    start, config = seif.start_pose(data), paper_config(world)
+    options = seif.SeifOptions()
+    options.sparsify = "eseif"
+    options.active = 5
+    copies = pickle.loads(pickle.dumps((data, config, options)))
+    assert copies[2].sparsify == seif.SeifOptions.Sparsify.Eseif and copies[2].active == 5
+    a = seif.make_filter("seif", start, config, options)
+    b = seif.make_filter("seif", start, copies[1], copies[2])
+    for step, twin in zip(data.steps, copies[0].steps):
+        a.step(step.u, step.observations)
+        b.step(twin.u, twin.observations)
+    np.testing.assert_array_equal(a.mean(), b.mean())
+    z = seif.Observation(4, np.array([1.5, -0.25]), np.diag([0.01, 0.002]))
+    z.truth = 9
+    back = pickle.loads(pickle.dumps(z))
+    assert (back.landmark, back.truth) == (4, 9)
+    np.testing.assert_array_equal(back.z, z.z)
+    np.testing.assert_array_equal(back.noise, z.noise)
+    car = seif.AckermannModel(seif.AckermannGeometry(), 0.1, 0.01)
+    assert repr(pickle.loads(pickle.dumps(car)).geometry) == repr(car.geometry)
+    request = seif.RunRequest("somewhere", "ekf")
+    request.association.method = "jcbb"
+    assert pickle.loads(pickle.dumps(request)).association.method == seif.AssociationMethod.Jcbb
