@@ -105,3 +105,28 @@ def test_simulator_clutter_and_missed_detections():
     truths = [(z.landmark, z.truth) for step in seif.build_dataset(log).steps for z in step.observations]
     assert sum(1 for lm, t in truths if t == seif.UNKNOWN_LANDMARK and lm == seif.UNKNOWN_LANDMARK) == len(clutter)
     assert all(lm == t for lm, t in truths)
+
+
+def test_run_loop_streams_a_source_with_its_ground_truth(simulated_folder):
+    """run_loop over an EventSource: the same trajectory as run_filter on the same folder, and
+    the observers get the ground truth the stream carries (on_ground_truth) as it comes."""
+    class Watch(seif.RunObserver):
+        def __init__(self):
+            super().__init__()
+            self.truth, self.poses = [], []
+
+        def on_ground_truth(self, pose):
+            self.truth.append(pose.time)
+
+        def after_update(self, filter, step, k, seconds):
+            self.poses.append(filter.pose())
+
+    source = seif.open_dataset(simulated_folder)
+    f = seif.make_filter("seif", source.info.start_pose, source.info.filter_config())
+    watch = Watch()
+    steps = seif.run_loop(f, source, [watch])
+    reference = seif.run_filter(seif.make_filter("seif", source.info.start_pose, source.info.filter_config()),
+                                seif.open_dataset(simulated_folder))
+    assert steps == len(watch.poses) == reference.steps
+    np.testing.assert_array_equal(np.array(watch.poses), reference.trajectory_array()[1:, 1:4])
+    assert len(watch.truth) > steps / 2 and watch.truth == sorted(watch.truth)
