@@ -51,6 +51,7 @@ __all__ = [name for name in dir(_core) if not name.startswith("_")] + [
     "read_tum",
     "read_map_csv",
     "plot_run",
+    "render_figure",
 ]
 
 
@@ -106,16 +107,37 @@ def read_map_csv(path):
     return _np.genfromtxt(path, delimiter=",", names=True, ndmin=1)
 
 
+FIGURES = ("run_map", "paper", "consistency", "bench")
+
+
+def render_figure(name, *args):
+    """Runs the CLI's figure script ``name`` (``run_map``, ``paper``, ``consistency`` or ``bench``,
+    shipped in the package's ``figures/`` folder) with this interpreter and ``args``, as the CLI
+    does after each command: ``render_figure("paper", out_dir)`` after ``PaperReport.write``,
+    ``render_figure("consistency", out_dir)`` after ``write_consistency_results``,
+    ``render_figure("bench", "out/bench.json", "out/bench.png")`` after writing
+    ``BenchReport.json()``. ``RuntimeError`` when matplotlib is missing or the script fails."""
+    import pathlib
+    import subprocess
+    import sys
+
+    if name not in FIGURES:
+        raise InvalidArgument(f"render_figure: unknown figure '{name}' (expected one of {', '.join(FIGURES)})")
+    script = pathlib.Path(__file__).with_name("figures") / f"{name}.py"
+    done = subprocess.run([sys.executable, str(script), *map(str, args)], capture_output=True, text=True)
+    if done.returncode == 3:
+        raise RuntimeError(f"render_figure {name}: matplotlib is not installed (apt-get install python3-matplotlib)")
+    if done.returncode != 0:
+        raise RuntimeError(f"render_figure {name} failed: {done.stderr.strip()}")
+
+
 def plot_run(run_dir, title=None):
     """``seif plot``: draws the output folder of a run (``seif run`` or ``run_dataset``) into
     ``run_dir/map.png`` and returns its path: the trajectory, the map with each landmark's 95 %
     covariance ellipse, the dead reckoning and, when the run stored GPS (``gps.csv``), the
-    fixes with the trajectory and map rigidly aligned to them. Rendered by the package's
-    ``run_map.py`` (the CLI's script) with this interpreter and matplotlib; ``DataError``
-    when a file the figure needs is missing, ``RuntimeError`` when drawing fails."""
+    fixes with the trajectory and map rigidly aligned to them (``render_figure("run_map", ...)``).
+    ``DataError`` when a file the figure needs is missing, ``RuntimeError`` when drawing fails."""
     import pathlib
-    import subprocess
-    import sys
 
     run_dir = pathlib.Path(run_dir)
     for name in ("trajectory.tum", "map.csv"):
@@ -124,16 +146,12 @@ def plot_run(run_dir, title=None):
             error.file, error.line = str(run_dir / name), 0
             raise error
     png = run_dir / "map.png"
-    args = [sys.executable, str(pathlib.Path(__file__).with_name("run_map.py")), str(png), "--ellipses"]
+    args = [png, "--ellipses"]
     if (run_dir / "gps.csv").is_file():
-        args += ["--gps", str(run_dir / "gps.csv")]
+        args += ["--gps", run_dir / "gps.csv"]
     if title:
         args += ["--title", title]
-    done = subprocess.run(args + [str(run_dir)], capture_output=True, text=True)
-    if done.returncode == 3:
-        raise RuntimeError("plot_run: matplotlib is not installed (apt-get install python3-matplotlib)")
-    if done.returncode != 0:
-        raise RuntimeError(f"plot_run: {png} was not drawn: {done.stderr.strip()}")
+    render_figure("run_map", *args, run_dir)
     return png
 
 

@@ -1,5 +1,6 @@
 """The same run from Python (run_dataset) and from the CLI (`seif run`) writes the same
 files, and metrics.json holds the same values (timings and the command line aside)."""
+import importlib.util
 import json
 import pathlib
 
@@ -186,6 +187,9 @@ def test_consistency_results_python_equal_cli(cli, tmp_path):
         assert (tmp_path / "cli" / name).read_text() == (tmp_path / "py" / name).read_text(), name
     assert seif.consistency_csv(result) == (tmp_path / "py" / "nees.csv").read_text()
     assert json.loads((tmp_path / "py" / "nees.json").read_text())["runs"] == 2
+    if importlib.util.find_spec("matplotlib"):
+        seif.render_figure("consistency", tmp_path / "py")
+        assert (tmp_path / "py" / "nees_global.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_bench_study_python_equals_cli(cli, tmp_path):
@@ -207,6 +211,12 @@ def test_bench_study_python_equals_cli(cli, tmp_path):
     assert shape(py_report) == shape(cli_report)
     assert all(r.measurement is not None and r.measurement.us_per_step_median > 0 for r in report.rows)
     assert report.targets.seif_growth is not None
+    if importlib.util.find_spec("matplotlib"):
+        (tmp_path / "py.json").write_text(report.json())
+        seif.render_figure("bench", tmp_path / "py.json", tmp_path / "py.png")
+        assert (tmp_path / "py.png").read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(seif.InvalidArgument, match="unknown figure"):
+        seif.render_figure("pie")
 
 
 def test_plot_run_draws_what_seif_plot_draws(cli, simulated_folder, tmp_path):
