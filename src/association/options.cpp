@@ -78,8 +78,9 @@ const std::array<AssociationOption, 12> kOptions = {{
      [](AssociationOptions& o, std::string_view v) { o.refresh = static_cast<int>(parseIntegerOf(kOptions, "refresh", v)); },
      [](const AssociationOptions& o) { return std::to_string(o.refresh); }},
     {"slack", "slack", Opt::Kind::Length, "", 0, 0, true,
-     "how far beyond the gate's radius the grid is queried, for means that moved since indexed [m] (0: the "
-     "new-landmark gate's radius at the first scan)",
+     "how far beyond the gate's reach (the point's and each landmark's own) the grid is queried, for means that "
+     "moved more than their covariance claimed since indexed [m] (0: the new-landmark gate's radius at the "
+     "first scan)",
      [](AssociationOptions& o, std::string_view v) { o.slack = options::parseLength("slack", v); },
      [](const AssociationOptions& o) { return formatReal(o.slack); }},
     {"drop-unlabelled", "drop_unlabelled", Opt::Kind::Flag, "", 0, 0, true,
