@@ -121,12 +121,15 @@ def render_figure(name, *args):
     import subprocess
     import sys
 
+    import importlib.util
+
     if name not in FIGURES:
         raise InvalidArgument(f"render_figure: unknown figure '{name}' (expected one of {', '.join(FIGURES)})")
-    script = pathlib.Path(__file__).with_name("figures") / f"{name}.py"
-    done = subprocess.run([sys.executable, str(script), *map(str, args)], capture_output=True, text=True)
-    if done.returncode == 3:
+    if importlib.util.find_spec("matplotlib") is None:
         raise RuntimeError(f"render_figure {name}: matplotlib is not installed (apt-get install python3-matplotlib)")
+    script = pathlib.Path(__file__).with_name("figures") / f"{name}.py"
+    done = subprocess.run([sys.executable, str(script), *map(str, args)], capture_output=True, text=True,
+                          errors="replace")
     if done.returncode != 0:
         raise RuntimeError(f"render_figure {name} failed: {done.stderr.strip()}")
 

@@ -663,7 +663,11 @@ void bindBench(py::module_& m) {
       [](const BenchRequest& request, const py::object& row_done) {
         const auto callback = pythonCallback<const BenchRow&>(row_done);
         py::gil_scoped_release release;
-        return runBench(request, callback);
+        return runBench(request, [&](const BenchRow& row) {
+          if (callback) callback(row);
+          py::gil_scoped_acquire gil;  // Ctrl-C stops the study after the case it is in
+          if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        });
       },
       py::arg("request"), py::arg("row_done") = py::none(),
       "`seif bench` as one call: every (filter, N) measured in forked children; row_done(row) follows "

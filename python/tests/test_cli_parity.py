@@ -217,6 +217,9 @@ def test_bench_study_python_equals_cli(cli, tmp_path):
         assert (tmp_path / "py.png").read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(seif.InvalidArgument, match="unknown figure"):
         seif.render_figure("pie")
+    request.repeat = 0
+    with pytest.raises(seif.InvalidArgument, match="repeat must be >= 1"):
+        seif.run_bench(request)
 
 
 def test_plot_run_draws_what_seif_plot_draws(cli, simulated_folder, tmp_path):

@@ -14,6 +14,7 @@
 #include <limits>
 #include <string>
 #include <unordered_map>
+#include <set>
 #include <unordered_set>
 
 namespace seif {
@@ -94,12 +95,18 @@ class LandmarkGrid {
   }
   /// The landmark's spread (kept until remove(), put() or not).
   void setSpread(int id, double sigma) {
-    spread_[id] = sigma;
-    spread_[id] = sigma;
-    max_spread_ = std::max(max_spread_, sigma);
+    const auto [it, added] = spread_.try_emplace(id, sigma);
+    if (!added) {
+      spreads_.erase(spreads_.find(it->second));
+      it->second = sigma;
+    }
+    spreads_.insert(sigma);
   }
   void remove(int id) {
-    spread_.erase(id);
+    if (const auto sp = spread_.find(id); sp != spread_.end()) {
+      spreads_.erase(spreads_.find(sp->second));
+      spread_.erase(sp);
+    }
     const auto it = where_.find(id);
     if (it == where_.end()) return;
     erase(it->second.key, id);
@@ -112,15 +119,21 @@ class LandmarkGrid {
   /// Ids indexed within `radius + scale * spread` of `c` (at their indexed positions).
   void query(const Vec2& c, double radius, double scale, std::vector<int>& out) const {
     out.clear();
-    const double reach = radius + scale * max_spread_;
+    const double reach = radius + scale * (spreads_.empty() ? 0.0 : *spreads_.rbegin());
     const auto lo = cellOf(c - Vec2::Constant(reach)), hi = cellOf(c + Vec2::Constant(reach));
-    for (std::int64_t i = lo.first; i <= hi.first; ++i) {
-      for (std::int64_t j = lo.second; j <= hi.second; ++j) {
-        const auto it = cells_.find(pack(i, j));
-        if (it == cells_.end()) continue;
-        for (int id : it->second) {
-          const double r = radius + scale * spread(id);
-          if ((where_.at(id).y - c).squaredNorm() <= r * r) out.push_back(id);
+    const auto take = [&](const std::vector<int>& cell) {
+      for (int id : cell) {
+        const double r = radius + scale * spread(id);
+        if ((where_.at(id).y - c).squaredNorm() <= r * r) out.push_back(id);
+      }
+    };
+    const double box = static_cast<double>(hi.first - lo.first + 1) * static_cast<double>(hi.second - lo.second + 1);
+    if (box > static_cast<double>(cells_.size())) {  // a reach wider than the map: its occupied cells
+      for (const auto& [key, cell] : cells_) take(cell);
+    } else {
+      for (std::int64_t i = lo.first; i <= hi.first; ++i) {
+        for (std::int64_t j = lo.second; j <= hi.second; ++j) {
+          if (const auto it = cells_.find(pack(i, j)); it != cells_.end()) take(it->second);
         }
       }
     }
@@ -146,7 +159,7 @@ class LandmarkGrid {
     if (v.empty()) cells_.erase(key);
   }
   double cell_ = 0.0;
-  double max_spread_ = 0.0;  // the largest spread set (never lowered: a wider query only costs time)
+  std::multiset<double> spreads_;  // every spread, for the largest (the query's box)
   std::unordered_map<std::int64_t, std::vector<int>> cells_;
   std::unordered_map<int, Entry> where_;
   std::unordered_map<int, double> spread_;
@@ -218,10 +231,10 @@ struct Associator::Impl {
   }
 
   /// Re-indexes the landmarks observed last scan and `refresh` others (cyclically), then
-  /// merges duplicates among those observed last scan. A landmark's indexed mean and its
-  /// spread are both from a scan that offered it (or started it), so a later move of its mean
-  /// within its covariance - a loop closure - still leaves it in reach; the slack covers
-  /// moves beyond what the covariance claimed.
+  /// merges duplicates among those observed last scan. A landmark's spread is from the last
+  /// scan that offered it (or started it) and its indexed mean from that scan's update or
+  /// later, so a later move of its mean within that covariance - a loop closure - still
+  /// leaves it in reach; the slack covers moves beyond what the covariance claimed.
   void refreshIndex(SlamFilter& filter) {
     if (!grid.ready()) {
       touched.clear();
@@ -312,8 +325,10 @@ struct Associator::Impl {
     p.covariance = 0.5 * (C + C.transpose());
   }
 
-  /// The landmarks the last scan started but the filter does not hold: its update failed
-  /// (all or nothing) and the caller went on. They are forgotten as never started.
+  /// The landmarks the last scan started in the filter (new ones, and held ones it confirmed)
+  /// but the filter does not hold: its update failed (all or nothing) and the caller went
+  /// on. They are forgotten as never started. (The scan's sightings of other provisional
+  /// landmarks stay counted.)
   void dropUnapplied(const SlamFilter& filter) {
     for (int id : started) {
       if (filter.hasLandmark(id)) continue;
@@ -520,6 +535,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
           // Confirmed: it enters the filter as one sighting of its fused estimate from here,
           // z = h(x, mean), with noise J_y C J_y^T: every sighting's information, once.
           if (apply) {
+            s.started.push_back(z.landmark);  // in the filter from this update on (if it takes it)
             Mat23 J_x;
             Mat2 J_y;
             z.z = sensor.predict(x, p->second.mean, &J_x, &J_y);

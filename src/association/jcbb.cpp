@@ -1,12 +1,12 @@
 // Joint compatibility branch and bound (Neira & Tardos, IEEE T-RA 17(6), 2001): depth first
 // over the observations, each paired with one of its individually compatible landmarks or
 // with none; a pairing is kept only if the joint innovation of the whole hypothesis passes
-// the chi-square(2k) gate - tested at every node, not only at the leaves - and a branch is
-// cut when it cannot pair more observations than the best hypothesis found (among the
-// hypotheses reached with as many, the smaller joint distance wins). The observations are
-// searched in the order of their nearest candidate's distance, so the answer does not depend
-// on the order the sensor listed them in, and where two hypotheses tie in pairings the
-// observation that fits best keeps its pairing. The joint
+// the chi-square(2k) gate - tested at every node, not only at the leaves. The answer is the
+// jointly compatible hypothesis with the most pairings and, among those, the smallest joint
+// distance: a branch is cut when it cannot pair more than the best found, or as many at a
+// smaller distance (the distance only grows as pairings are added). The observations are
+// searched in the order of their nearest candidate's distance, so good hypotheses come
+// first and the answer does not depend on the order the data lists them in. The joint
 // innovation covariance S_H = J_H Sigma J_H^T + R_H uses one joint marginal Sigma of the
 // pose and every candidate of the scan; its Cholesky factor grows by one 2x2 block per
 // pairing (O(k^2) per node).
@@ -26,8 +26,11 @@ double chiSquareEvenQuantile(double p, int k) {
     const double h = 0.5 * x;
     if (h <= 0.0) return 0.0;
     const double log_h = std::log(h);
-    double upper = 0.0;
-    for (int i = 0; i < k; ++i) upper += std::exp(-h + i * log_h - std::lgamma(i + 1.0));
+    double log_term = -h, upper = 0.0;  // log of exp(-h) h^i / i!
+    for (int i = 0; i < k; ++i) {
+      if (i > 0) log_term += log_h - std::log(static_cast<double>(i));
+      upper += std::exp(log_term);
+    }
     return 1.0 - upper;
   };
   double lo = 0.0, hi = 2.0 * k + 10.0;
@@ -129,8 +132,7 @@ class Search {
       chosen_[i] = nullptr;
       if (truncated_) return;
     }
-    // Leave observation i unpaired only if the rest could still pair more than the best.
-    if (k + static_cast<int>(m - i - 1) > best_pairings_) recurse(i + 1, k, d2);
+    recurse(i + 1, k, d2);  // observation i unpaired (cut on entry if it cannot beat the best)
   }
 
   /// The hypothesis in chosen_ (k pairings, joint distance d2) becomes the best if it has

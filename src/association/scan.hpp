@@ -37,7 +37,8 @@ struct ScanProblem {
 /// nn: pairings inside the gate taken greedily by distance, each landmark at most once.
 std::vector<int> assignNearestNeighbour(const ScanProblem& scan);
 /// jcbb: the hypothesis with the most pairings (ties: the smallest joint distance) whose
-/// joint innovation passes the chi-square(2k) gate, searched depth first at most
+/// joint innovation passes the chi-square(2k) gate at each of its prefixes in the search
+/// order (observations by their nearest candidate's distance), searched depth first at most
 /// `max_nodes` nodes. When the bound stops the search (*truncated), the best hypothesis
 /// found so far is returned, partial ones (a dive cut short) included.
 std::vector<int> assignJcbb(const ScanProblem& scan, std::size_t max_nodes, bool* truncated);

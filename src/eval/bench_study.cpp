@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <csignal>
+#include <fcntl.h>
 #include <sys/utsname.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -152,13 +153,16 @@ struct Outcome {
 /// The child is killed by SIGALRM after `timeout_seconds`.
 Outcome runIsolated(const BenchCase& c, unsigned timeout_seconds) {
   int fds[2];
-  if (pipe(fds) != 0) throw std::runtime_error("bench: pipe() failed");
+  if (pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error("bench: pipe() failed");
   std::fflush(stdout);
   std::fflush(stderr);
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("bench: fork() failed");
   if (pid == 0) {  // the child: measure, write, leave without running the parent's atexit
     close(fds[0]);
+    // The caller's handlers (an embedding interpreter's, say) would keep the alarm and
+    // Ctrl-C from ending the child.
+    for (int sig : {SIGALRM, SIGINT, SIGTERM}) std::signal(sig, SIG_DFL);
     alarm(timeout_seconds);
     std::string payload;
     int code = 0;
@@ -318,6 +322,17 @@ const BenchMeasurement* find(const std::vector<BenchMeasurement>& all, const std
 }  // namespace
 
 BenchReport runBench(const BenchRequest& request, const std::function<void(const BenchRow&)>& row_done) {
+  if (request.filters.empty()) throw InvalidArgument("bench: no filter to measure");
+  if (request.landmarks.empty()) throw InvalidArgument("bench: no map size to measure");
+  for (int n : request.landmarks) {
+    if (n < 1) throw InvalidArgument("bench: the number of landmarks must be >= 1 (got " + std::to_string(n) + ")");
+  }
+  if (request.window < 1) throw InvalidArgument("bench: the window must be >= 1 step");
+  if (request.repeat < 1) throw InvalidArgument("bench: repeat must be >= 1 run per case");
+  if (!(request.max_seconds > 0.0 && std::isfinite(request.max_seconds)) ||
+      !(request.max_memory_gb > 0.0 && std::isfinite(request.max_memory_gb))) {
+    throw InvalidArgument("bench: the time and memory budgets must be positive and finite");
+  }
   BenchReport report;
   report.request = request;
   BenchRequest& args = report.request;
