@@ -327,7 +327,9 @@ TEST(Association, AScanWhoseUpdateFailedLeavesNoLandmarkBehind) {
       }
       ASSERT_NO_THROW(a.finish(*f)) << label;
       EXPECT_EQ(a.counts().landmarks_final, f->landmarkIds().size()) << label;
-      if (place == ProvisionalPlace::Filter) EXPECT_EQ(a.counts().new_landmarks, in_filter.size()) << label;
+      if (place == ProvisionalPlace::Filter) {
+        EXPECT_EQ(a.counts().new_landmarks, in_filter.size()) << label;
+      }
     }
   }
 }
