@@ -6,7 +6,8 @@
 #include "association/scan.hpp"
 #include "filters/option_values.hpp"
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -426,10 +427,9 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     const Mat2 W = J_x * pose.covariance * J_x.transpose() + J_z * sensor.noise(observations[i]) * J_z.transpose();
     const Mat2 V = J_z * sensor.noise(observations[i]) * J_z.transpose();
     spread[i] = 0.5 * (V + V.transpose());
-    const double lmax = Eigen::SelfAdjointEigenSolver<Mat2>(0.5 * (W + W.transpose()), Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
-    sigma[i] = std::sqrt(std::max(0.0, lmax));
+    sigma[i] = worstSigma(W);
     radius[i] = std::sqrt(s.new_d2) * sigma[i];
-    if (!point[i].allFinite() || !std::isfinite(lmax) || !std::isfinite(radius[i])) {  // max(0, NaN) is 0
+    if (!point[i].allFinite() || !W.allFinite() || !std::isfinite(radius[i])) {  // worstSigma's max(0, NaN) is 0
       throw ModelError("association: observation " + std::to_string(i) + " has no finite position in the map");
     }
   }
