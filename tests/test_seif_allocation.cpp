@@ -239,3 +239,27 @@ TEST(SeifAllocation, AllMarginalsOfAStateCostOneFactorisation) {
   EXPECT_LT(first_pass, 100u) << "for " << seif.landmarkIds().size() << " landmarks";
   EXPECT_EQ(second_pass, 0u);
 }
+
+#include "association/candidate_grid.hpp"
+
+// The associator's index: once every landmark is indexed and has a spread, a scan's work
+// on it - new spreads (the largest among them dropping), moves within a cell, queries into a
+// buffer that is large enough - allocates nothing.
+TEST(SeifAllocation, TheCandidateGridsSpreadsAndQueriesAllocateNothing) {
+  seif::CandidateGrid grid;
+  grid.setCell(10.0);
+  for (int id = 0; id < 200; ++id) {
+    grid.put(id, seif::Vec2(1.0 + 0.5 * id, 2.0));
+    grid.setSpread(id, 0.1 + 0.01 * id);
+  }
+  std::vector<int> out;
+  out.reserve(200);
+  const std::size_t count = g_allocations.load();
+  for (int id = 0; id < 200; ++id) {
+    grid.setSpread(id, id == 199 ? 0.05 : 0.2);  // the largest (id 199's 2.09) drops
+    grid.put(id, seif::Vec2(1.0 + 0.5 * id + 0.001, 2.0));
+    grid.query(seif::Vec2(50.0, 2.0), 1.0, 3.0, out);
+  }
+  EXPECT_EQ(g_allocations.load() - count, 0u);
+  EXPECT_FALSE(out.empty());
+}

@@ -3,6 +3,7 @@
 // provisional landmarks, and the scoring against Observation::truth.
 #include <seif/core/errors.hpp>
 #include <seif/association/association.hpp>
+#include "association/candidate_grid.hpp"
 #include "association/scan.hpp"
 #include "filters/option_values.hpp"
 
@@ -15,7 +16,6 @@
 #include <limits>
 #include <string>
 #include <unordered_map>
-#include <set>
 #include <unordered_set>
 
 namespace seif {
@@ -70,102 +70,6 @@ double correspondenceDistance(const SlamFilter& filter, int a, int b, MarginalMo
 
 namespace {
 
-/// A uniform grid of landmark positions: insert, move, remove and a disc query, each
-/// O(landmarks in the cells touched). Each landmark carries a spread: the standard deviation
-/// of its mean along its worst axis when last known (sqrt(lambda_max(Sigma_yy))), which a
-/// query adds, scaled, to its radius.
-class LandmarkGrid {
- public:
-  void setCell(double cell) { cell_ = cell; }
-  bool ready() const { return cell_ > 0.0; }
-
-  void put(int id, const Vec2& y) {
-    const auto it = where_.find(id);
-    const std::int64_t key = keyOf(y);
-    if (it != where_.end()) {
-      if (it->second.key != key) {
-        erase(it->second.key, id);
-        cells_[key].push_back(id);
-        it->second.key = key;
-      }
-      it->second.y = y;
-      return;
-    }
-    cells_[key].push_back(id);
-    where_[id] = {key, y};
-  }
-  /// The landmark's spread (kept until remove(), put() or not).
-  void setSpread(int id, double sigma) {
-    const auto [it, added] = spread_.try_emplace(id, sigma);
-    if (!added) {
-      spreads_.erase(spreads_.find(it->second));
-      it->second = sigma;
-    }
-    spreads_.insert(sigma);
-  }
-  void remove(int id) {
-    if (const auto sp = spread_.find(id); sp != spread_.end()) {
-      spreads_.erase(spreads_.find(sp->second));
-      spread_.erase(sp);
-    }
-    const auto it = where_.find(id);
-    if (it == where_.end()) return;
-    erase(it->second.key, id);
-    where_.erase(it);
-  }
-  double spread(int id) const {
-    const auto it = spread_.find(id);
-    return it != spread_.end() ? it->second : 0.0;
-  }
-  /// Ids indexed within `radius + scale * spread` of `c` (at their indexed positions).
-  void query(const Vec2& c, double radius, double scale, std::vector<int>& out) const {
-    out.clear();
-    const double reach = radius + scale * (spreads_.empty() ? 0.0 : *spreads_.rbegin());
-    const auto lo = cellOf(c - Vec2::Constant(reach)), hi = cellOf(c + Vec2::Constant(reach));
-    const auto take = [&](const std::vector<int>& cell) {
-      for (int id : cell) {
-        const double r = radius + scale * spread(id);
-        if ((where_.at(id).y - c).squaredNorm() <= r * r) out.push_back(id);
-      }
-    };
-    const double box = static_cast<double>(hi.first - lo.first + 1) * static_cast<double>(hi.second - lo.second + 1);
-    if (box > static_cast<double>(cells_.size())) {  // a reach wider than the map: its occupied cells
-      for (const auto& [key, cell] : cells_) take(cell);
-    } else {
-      for (std::int64_t i = lo.first; i <= hi.first; ++i) {
-        for (std::int64_t j = lo.second; j <= hi.second; ++j) {
-          if (const auto it = cells_.find(pack(i, j)); it != cells_.end()) take(it->second);
-        }
-      }
-    }
-    std::sort(out.begin(), out.end());
-  }
-
- private:
-  struct Entry {
-    std::int64_t key;
-    Vec2 y;
-  };
-  std::pair<std::int64_t, std::int64_t> cellOf(const Vec2& y) const {
-    return {static_cast<std::int64_t>(std::floor(y.x() / cell_)), static_cast<std::int64_t>(std::floor(y.y() / cell_))};
-  }
-  static std::int64_t pack(std::int64_t i, std::int64_t j) { return (i << 32) ^ (j & 0xffffffff); }
-  std::int64_t keyOf(const Vec2& y) const {
-    const auto [i, j] = cellOf(y);
-    return pack(i, j);
-  }
-  void erase(std::int64_t key, int id) {
-    auto& v = cells_[key];
-    v.erase(std::find(v.begin(), v.end(), id));
-    if (v.empty()) cells_.erase(key);
-  }
-  double cell_ = 0.0;
-  std::multiset<double> spreads_;  // every spread, for the largest (the query's box)
-  std::unordered_map<std::int64_t, std::vector<int>> cells_;
-  std::unordered_map<int, Entry> where_;
-  std::unordered_map<int, double> spread_;
-};
-
 /// sqrt(lambda_max) of a 2x2 covariance, in closed form.
 double worstSigma(const Mat2& C) {
   const double a = C(0, 0), d = C(1, 1), b = 0.5 * (C(0, 1) + C(1, 0));
@@ -192,7 +96,7 @@ struct Associator::Impl {
   AssociationOptions options;
   AssociationCounts counts;
   double accept_d2 = 0.0, new_d2 = 0.0, merge_d2 = 0.0;
-  LandmarkGrid grid;
+  CandidateGrid grid;
   double slack = 0.0;
   int next_id = 0;
   // Per landmark: how many of its observations carried each truth id (kUnknownLandmark
