@@ -58,6 +58,7 @@ inline nlohmann::json estimateMetrics(const std::filesystem::path& dir) {
                           "us_per_step_median", "command_line"}) {
     j.erase(key);
   }
+  if (j.contains("association")) j["association"].erase("seconds");
   return j;
 }
 

@@ -9,6 +9,7 @@
 #include <seif/eval/run_loop.hpp>
 #include <seif/eval/stats.hpp>
 #include <seif/association/association.hpp>
+#include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/sim/world.hpp>
 #include "association/scan.hpp"
@@ -504,4 +505,64 @@ TEST(Association, HeldProvisionalLandmarksKeepClutterOutOfThePaperSeif) {
   // churns its six active links and it associates 94.5 % correctly (12 duplicates, map
   // 1.15 m); held outside the filter, 99.54 % and 0.44 m (known association: 0.38 m).
   expectGoodAssociationOnThePark("seif", 5, 0.6, ProvisionalPlace::Held);
+}
+
+// The associator's checkpoint state (Associator::saveState): restored, it writes the same
+// bytes and associates the next scans as the original does; damaged bytes are refused.
+TEST(Association, ItsStateRestoresBitForBitAndDamagedStateIsRefused) {
+  WorldConfig world = presetConfig(WorldPreset::Park, 0, 600, 3);
+  world.clutter = 1.0;
+  world.detection_probability = 0.9;
+  const Dataset data = buildDataset(simulate(world));
+  const FilterConfig config = paperFilterConfig(data.noise.value_or(world.noise));
+  auto f = makeFilter("ekf", startPose(data), config);
+  AssociationOptions o;
+  o.method = AssociationMethod::Jcbb;
+  o.provisional = ProvisionalPlace::Held;
+  Associator a(o);
+  const std::size_t half = data.steps.size() / 2;
+  for (std::size_t k = 0; k < half; ++k) {
+    std::vector<Observation> z = data.steps[k].observations;
+    f->predict(data.steps[k].u);
+    a.associate(*f, k, z);
+    f->update(z);
+  }
+  const std::string bytes = a.saveState();
+  Associator b = Associator::restoreState(bytes, "state");
+  EXPECT_TRUE(b.saveState() == bytes);  // (not printed: binary)
+  ASSERT_GT(a.counts().new_landmarks, 0u);
+  // The rest of the run from the two, each with its own copy of the filter.
+  auto g = loadFromBytes(saveToBytes(*f), "filter");
+  for (std::size_t k = half; k < data.steps.size(); ++k) {
+    std::vector<Observation> z = data.steps[k].observations, w = z;
+    f->predict(data.steps[k].u);
+    g->predict(data.steps[k].u);
+    a.associate(*f, k, z);
+    b.associate(*g, k, w);
+    ASSERT_EQ(z.size(), w.size()) << k;
+    for (std::size_t i = 0; i < z.size(); ++i) ASSERT_EQ(z[i].landmark, w[i].landmark) << k;
+    f->update(z);
+    g->update(w);
+  }
+  // The same counts (the time spent associating aside) and the same map.
+  const AssociationCounts &ca = a.counts(), &cb = b.counts();
+  EXPECT_EQ(ca.observations, cb.observations);
+  EXPECT_EQ(ca.new_landmarks, cb.new_landmarks);
+  EXPECT_EQ(ca.ambiguous_dropped, cb.ambiguous_dropped);
+  EXPECT_EQ(ca.provisional_removed, cb.provisional_removed);
+  EXPECT_EQ(ca.merged, cb.merged);
+  EXPECT_EQ(f->landmarkIds(), g->landmarkIds());
+  EXPECT_TRUE(f->mean() == g->mean());
+
+  // Damaged: cut short, a byte changed (the checksum), a filter's checkpoint instead.
+  EXPECT_THROW(Associator::restoreState(bytes.substr(0, bytes.size() - 5), "state"), DataError);
+  std::string flipped = bytes;
+  flipped[flipped.size() / 2] ^= 0x20;
+  EXPECT_THROW(Associator::restoreState(flipped, "state"), DataError);
+  try {
+    Associator::restoreState(saveToBytes(*f), "filter.ckpt");
+    ADD_FAILURE() << "a filter's checkpoint restored as an associator";
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("filter.ckpt"), std::string::npos) << e.what();
+  }
 }

@@ -14,6 +14,7 @@
 #include <atomic>
 #include <filesystem>
 #include <string>
+#include <tuple>
 
 namespace fs = std::filesystem;
 using seif::test::runCli;
@@ -84,6 +85,79 @@ TEST(RunStop, AStoppedRunWritesWhatItRanAndItsCheckpointResumesToTheWholeRun) {
     EXPECT_FALSE(rest.output.interrupted);
     expectSameOutputs(resumed, whole);
   }
+}
+
+// The same with data association: the checkpoint carries the associator (its index,
+// provisional landmarks, held estimates and tallies), and the resumed run scores the same.
+TEST(RunStop, AnAssociatingRunStoppedAndResumedEqualsTheWholeRun) {
+  const auto dir = scratchDir("run-stop-association");
+  seif::WorldConfig world = seif::presetConfig(seif::WorldPreset::Park, 0, 1600, 2);
+  world.clutter = 1.0;
+  world.detection_probability = 0.9;
+  const fs::path data = dir / "data";
+  seif::writeMrclam(data, seif::simulate(world));
+  for (const auto& [filter, method, place] :
+       {std::tuple{"seif", seif::AssociationMethod::NearestNeighbour, seif::ProvisionalPlace::Filter},
+        std::tuple{"ekf", seif::AssociationMethod::Jcbb, seif::ProvisionalPlace::Held}}) {
+    SCOPED_TRACE(filter);
+    seif::RunRequest request;
+    request.dataset = data;
+    request.filter = filter;
+    request.association.method = method;
+    request.association.provisional = place;
+    request.association.marginal = std::string(filter) == "seif" ? seif::MarginalMode::Local : seif::MarginalMode::Exact;
+    const fs::path whole = dir / (std::string(filter) + "-whole");
+    fs::create_directories(whole);
+    seif::runDataset(request, whole);
+
+    std::atomic<bool> stop{false};
+    request.stop = &stop;
+    request.checkpoint = dir / (std::string(filter) + ".ckpt");
+    const fs::path part = dir / (std::string(filter) + "-part");
+    fs::create_directories(part);
+    int reports = 0;  // stopped at the second progress report, after step 1024
+    const seif::RunReport stopped = seif::runDataset(request, part, [&](double) {
+      if (++reports == 2) stop.store(true);
+    });
+    ASSERT_TRUE(stopped.output.interrupted);
+    EXPECT_EQ(stopped.output.steps, 1025u);
+    ASSERT_GT(stopped.association->new_landmarks, 0u);  // stopped with a map and provisional landmarks
+
+    seif::RunRequest resume;  // the association comes with the checkpoint
+    resume.dataset = data;
+    resume.resume = request.checkpoint;
+    const fs::path resumed = dir / (std::string(filter) + "-resumed");
+    fs::create_directories(resumed);
+    const seif::RunReport rest = seif::runDataset(resume, resumed);
+    EXPECT_EQ(rest.association_options.method, method);
+    expectSameOutputs(resumed, whole);
+    EXPECT_GT(estimateMetrics(whole).at("association").at("correct").get<std::size_t>(), 0u);
+  }
+}
+
+TEST(RunStop, AResumedRunReadsItsDatasetWithTheSameOptions) {
+  const auto dir = scratchDir("run-stop-options");
+  seif::RunRequest request;
+  request.dataset = writeWorld(dir, 2000);
+  std::atomic<bool> stop{false};
+  request.stop = &stop;
+  request.checkpoint = dir / "run.ckpt";
+  const fs::path out = dir / "out";
+  fs::create_directories(out);
+  seif::runDataset(request, out, [&](double) { stop.store(true); });
+  seif::RunRequest resume;
+  resume.dataset = request.dataset;
+  resume.resume = request.checkpoint;
+  resume.dataset_options.noise["sigma_range"] = 0.5;  // other events than the checkpoint's run read
+  try {
+    seif::runDataset(resume, out);
+    ADD_FAILURE() << "resumed with other dataset options";
+  } catch (const seif::DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("sigma_range 0.5"), std::string::npos) << e.what();
+  }
+  resume.association.method = seif::AssociationMethod::NearestNeighbour;  // no associator in the checkpoint
+  resume.dataset_options = {};
+  EXPECT_THROW(seif::runDataset(resume, out), seif::InvalidArgument);
 }
 
 TEST(RunStop, AStopBeforeTheFirstStepIsInterruptedAndWritesNothing) {

@@ -196,7 +196,7 @@ void run(const RunArgs& args) {
     std::fflush(stdout);
     std::string what = "run interrupted after " + std::to_string(out.steps) + " steps: the outputs above cover them";
     if (!args.checkpoint.empty()) {
-      what += "; checkpoint saved: go on with --resume " + args.checkpoint + " (and the same --dataset)";
+      what += "; checkpoint saved: go on with --resume " + args.checkpoint + " (and the same --dataset and its options)";
     }
     throw Interrupted(what);
   }
@@ -266,9 +266,9 @@ void addRunCommand(CLI::App& app) {
                   "Ctrl-C (or SIGTERM) stops a run after the step it is in, writes the outputs so far and,\n"
                   "with --checkpoint, a checkpoint there to --resume from; exit status 130");
   cmd->add_option("--resume", args->resume,
-                  "resume the run saved in this checkpoint (same --dataset): the filter is the\n"
-                  "checkpoint's, the steps it consumed are skipped, and the outputs equal those of\n"
-                  "the uninterrupted run");
+                  "resume the run saved in this checkpoint (same --dataset, --robot, --detections and\n"
+                  "noise flags): the filter and the association are the checkpoint's, the steps it\n"
+                  "consumed are skipped, and the outputs equal those of the uninterrupted run");
   cmd->add_flag("--smooth", args->smooth,
                  "after the filter, the batch MAP from the filter's estimate (the batch's flags below\n"
                  "set its solver): the smoothed trajectory and map are the outputs, the filter's are written\n"

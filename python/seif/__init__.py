@@ -41,7 +41,18 @@ def _save_filter(self, path, steps_consumed=0, values=None):
     _core.save_checkpoint(self, path, steps_consumed, values or {})
 
 
+def _associator_from_bytes(data, name):
+    """Unpickling: the associator in its state bytes."""
+    return _core.Associator.from_state_bytes(data, name)
+
+
+def _reduce_associator(self):
+    """Pickling: an associator travels as its checkpoint state (``state_bytes``), bit-exactly."""
+    return (_associator_from_bytes, (self.state_bytes(), "pickle of an associator"))
+
+
 _core.SlamFilter.__reduce__ = _reduce_filter
+_core.Associator.__reduce__ = _reduce_associator
 _core.SlamFilter.save = _save_filter
 
 __all__ = [name for name in dir(_core) if not name.startswith("_")] + [

@@ -6,6 +6,25 @@
 
 namespace seif::python {
 
+namespace {
+
+/// The extras' values: str where they are UTF-8 text, bytes where they are binary.
+py::dict valuesToPython(const std::map<std::string, std::string>& values) {
+  py::dict out;
+  for (const auto& [key, value] : values) {
+    PyObject* text = PyUnicode_DecodeUTF8(value.data(), static_cast<Py_ssize_t>(value.size()), "strict");
+    if (text != nullptr) {
+      out[py::str(key)] = py::reinterpret_steal<py::object>(text);
+    } else {
+      PyErr_Clear();
+      out[py::str(key)] = py::bytes(value);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 void bindCheckpoints(py::module_& m) {
   m.def(
       "save_checkpoint",
@@ -27,9 +46,11 @@ void bindCheckpoints(py::module_& m) {
       [](const std::filesystem::path& path) {
         CheckpointExtras extras;
         std::unique_ptr<SlamFilter> filter = load(path, &extras);
-        return py::make_tuple(std::move(filter), extras.steps_consumed, extras.values);
+        return py::make_tuple(std::move(filter), extras.steps_consumed, valuesToPython(extras.values));
       },
-      py::arg("path"), "(filter, steps_consumed, values): a checkpoint with the run position saved beside it.");
+      py::arg("path"),
+      "(filter, steps_consumed, values): a checkpoint with the run position saved beside it; a value\n"
+      "that is text is a str, one that is binary (a run's outputs, its associator) bytes.");
   m.def(
       "checkpoint_bytes", [](const SlamFilter& filter) { return py::bytes(saveToBytes(filter)); },
       py::arg("filter"), "The checkpoint of `filter` as bytes (what pickling stores).");

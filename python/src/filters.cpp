@@ -513,7 +513,16 @@ void bindAssociation(py::module_& m) {
       .def("finish", &Associator::finish, py::arg("filter"))
       .def("truth_of", &Associator::truthOf, py::arg("id"))
       .def_property_readonly("counts", &Associator::counts, py::return_value_policy::copy)
-      .def_property_readonly("options", &Associator::options, py::return_value_policy::copy);
+      .def_property_readonly("options", &Associator::options, py::return_value_policy::copy)
+      .def(
+          "state_bytes", [](const Associator& a) { return py::bytes(a.saveState()); },
+          "Its whole state as checkpoint bytes (what a run's checkpoint carries beside the filter, "
+          "under ASSOCIATOR_KEY): from_state_bytes continues it bit for bit")
+      .def_static(
+          "from_state_bytes",
+          [](const py::bytes& data, const std::string& name) { return Associator::restoreState(std::string_view(data), name); },
+          py::arg("data"), py::arg("name") = "bytes", "The associator state_bytes wrote (DataError naming `name` otherwise)");
+  m.attr("ASSOCIATOR_KEY") = std::string(kAssociatorKey);
 }
 
 void bindFilters(py::module_& m) {

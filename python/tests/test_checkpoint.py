@@ -194,6 +194,18 @@ def test_run_loop_with_a_python_observer(paper_world):
     assert rec.steps[-1][0] == 39
 
 
+def _ctrl_c_at_report(n):
+    """A progress callback that sends this process SIGINT (Ctrl-C) at its n-th call."""
+    reports = []
+
+    def callback(fraction):
+        reports.append(fraction)
+        if len(reports) == n:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    return callback
+
+
 def test_keyboard_interrupt_stops_a_run_whole_and_its_checkpoint_resumes(tmp_path):
     """Ctrl-C during run_dataset: the run stops after the step it is in, writes its outputs and
     the checkpoint, then KeyboardInterrupt is raised; the checkpoint resumes to the whole run."""
@@ -205,13 +217,7 @@ def test_keyboard_interrupt_stops_a_run_whole_and_its_checkpoint_resumes(tmp_pat
 
     request = seif.RunRequest(str(folder), "seif")
     request.checkpoint = str(tmp_path / "run.ckpt")
-    reports = []
-
-    def ctrl_c_at_the_second_report(fraction):  # progress comes every 1024 steps
-        reports.append(fraction)
-        if len(reports) == 2:
-            os.kill(os.getpid(), signal.SIGINT)
-
+    ctrl_c_at_the_second_report = _ctrl_c_at_report(2)  # progress comes every 1024 steps
     part = tmp_path / "part"
     part.mkdir()
     with pytest.raises(KeyboardInterrupt):
@@ -260,3 +266,73 @@ def test_value_types_pickle_by_value(paper_world):
     request = seif.RunRequest("somewhere", "ekf")
     request.association.method = "jcbb"
     assert pickle.loads(pickle.dumps(request)).association.method == seif.AssociationMethod.Jcbb
+
+
+def test_an_associator_pickles_and_continues_as_the_original():
+    """Associator.state_bytes / from_state_bytes (and pickling): the restored associator gives
+    the rest of the run the same landmark ids as the original, each beside its own filter."""
+    data, world = seif.simulated_dataset("park", steps=500, seed=3, clutter=1.0, detection_probability=0.9)
+    config = seif.paper_filter_config(world.noise)
+    options = seif.AssociationOptions()
+    options.method = seif.AssociationMethod.Jcbb
+    options.provisional = seif.ProvisionalPlace.Held
+    a = seif.Associator(options)
+    f = seif.make_filter("ekf", seif.start_pose(data), config)
+    half = len(data.steps) // 2
+    for k, step in enumerate(data.steps[:half]):
+        f.predict(step.u)
+        f.update(a.associate(f, k, step.observations))
+    b = pickle.loads(pickle.dumps(a))
+    assert b.state_bytes() == a.state_bytes()
+    g = pickle.loads(pickle.dumps(f))
+    for k, step in enumerate(data.steps[half:], start=half):
+        f.predict(step.u)
+        g.predict(step.u)
+        za, zb = a.associate(f, k, step.observations), b.associate(g, k, step.observations)
+        assert [z.landmark for z in za] == [z.landmark for z in zb], k
+        f.update(za)
+        g.update(zb)
+    assert a.counts.new_landmarks > 0 and a.counts.new_landmarks == b.counts.new_landmarks
+    np.testing.assert_array_equal(f.mean(), g.mean())
+    with pytest.raises(seif.DataError, match="damaged.bin"):
+        seif.Associator.from_state_bytes(a.state_bytes()[:-3], "damaged.bin")
+
+
+def test_a_run_checkpoint_with_association_loads_and_resumes(tmp_path):
+    """A run with association stopped by Ctrl-C: its checkpoint's values are str where text and
+    bytes where binary (the run's outputs, the associator), save_checkpoint takes them back, and
+    the checkpoint resumes to the whole run."""
+    folder = tmp_path / "data"
+    world = seif.preset_config("park", 0, 1500, 2)
+    world.clutter = 1.0
+    seif.write_mrclam(folder, seif.simulate(world))
+    request = seif.RunRequest(str(folder), "seif")
+    request.association.method = seif.AssociationMethod.NearestNeighbour
+    request.association.marginal = seif.MarginalMode.Local
+    whole = tmp_path / "whole"
+    whole.mkdir()
+    seif.run_dataset(request, str(whole))
+
+    request.checkpoint = str(tmp_path / "run.ckpt")
+    ctrl_c_at_the_second_report = _ctrl_c_at_report(2)
+    part = tmp_path / "part"
+    part.mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        seif.run_dataset(request, str(part), ctrl_c_at_the_second_report)
+    f, steps, values = seif.load_checkpoint(request.checkpoint)
+    assert steps == 1025
+    assert isinstance(values["filter"], str) and values["filter"] == "seif"
+    assert isinstance(values[seif.ASSOCIATOR_KEY], bytes)
+    restored = seif.Associator.from_state_bytes(values[seif.ASSOCIATOR_KEY])
+    assert restored.options.method == seif.AssociationMethod.NearestNeighbour
+    seif.save_checkpoint(f, tmp_path / "again.ckpt", steps, values)  # bytes and str values back
+    assert seif.load_checkpoint(tmp_path / "again.ckpt")[2] == values
+
+    resume = seif.RunRequest(str(folder), "seif")
+    resume.resume = str(tmp_path / "again.ckpt")
+    resumed = tmp_path / "resumed"
+    resumed.mkdir()
+    report = seif.run_dataset(resume, str(resumed))
+    assert report.association.observations > 0
+    for name in ("trajectory.tum", "map.csv"):
+        assert (resumed / name).read_bytes() == (whole / name).read_bytes(), name

@@ -5,6 +5,7 @@
 #include <seif/association/association.hpp>
 #include "association/candidate_grid.hpp"
 #include "association/scan.hpp"
+#include "core/binary_archive.hpp"
 #include "filters/option_values.hpp"
 
 #include <Eigen/Cholesky>
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -524,6 +526,180 @@ void Associator::finish(SlamFilter& filter) {
       (truth == label && !duplicate ? c.correct : c.wrong) += n;
     }
   }
+}
+
+// ---------------------------------------------------------------- checkpoints ---------
+// Every map is written by ascending id, so equal states write equal bytes; what is derived
+// (the gates' distances, the grid's cells, JCBB's cached joint gates) is rebuilt.
+
+namespace {
+
+constexpr std::size_t AssociationCounts::*kCountFields[] = {
+    &AssociationCounts::observations,        &AssociationCounts::scored,
+    &AssociationCounts::correct,             &AssociationCounts::wrong,
+    &AssociationCounts::unlabelled,          &AssociationCounts::unlabelled_matched,
+    &AssociationCounts::in_removed_landmarks, &AssociationCounts::new_landmarks,
+    &AssociationCounts::ambiguous_dropped,   &AssociationCounts::unlabelled_dropped,
+    &AssociationCounts::provisional_removed, &AssociationCounts::provisional_final,
+    &AssociationCounts::merged,              &AssociationCounts::jcbb_truncated,
+    &AssociationCounts::landmarks_final,     &AssociationCounts::spurious_landmarks,
+    &AssociationCounts::duplicate_landmarks,
+};
+
+template <class Map>
+std::vector<typename Map::key_type> sortedKeys(const Map& map) {
+  std::vector<typename Map::key_type> keys;
+  keys.reserve(map.size());
+  for (const auto& entry : map) keys.push_back(entry.first);
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+
+void writeIds(ArchiveWriter& w, const std::vector<int>& ids) {
+  w.count(ids.size());
+  for (int id : ids) w.i64(id);
+}
+
+int readId(ArchiveReader& r, const char* what) {
+  return static_cast<int>(r.i64In(what, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
+}
+
+std::vector<int> readIds(ArchiveReader& r, const char* what) {
+  std::vector<int> ids(r.count(what, 9));
+  for (int& id : ids) id = readId(r, what);
+  return ids;
+}
+
+}  // namespace
+
+std::string Associator::saveState() const {
+  const Impl& s = *impl_;
+  ArchiveWriter w;
+  w.section("associator");
+  w.count(associationOptions().size());
+  for (const AssociationOption& o : associationOptions()) {
+    w.str(o.key);
+    w.str(o.get(s.options));
+  }
+  for (const auto field : kCountFields) w.u64(s.counts.*field);
+  w.f64(s.counts.seconds);
+  w.f64(s.grid.cell());
+  const auto positions = s.grid.positions();
+  w.count(positions.size());
+  for (const auto& [id, y] : positions) {
+    w.i64(id);
+    w.fixed(y);
+  }
+  const auto spreads = s.grid.spreads();
+  w.count(spreads.size());
+  for (const auto& [id, sigma] : spreads) {
+    w.i64(id);
+    w.f64(sigma);
+  }
+  w.f64(s.slack);
+  w.i64(s.next_id);
+  w.count(s.seen_truths.size());
+  for (int id : sortedKeys(s.seen_truths)) {
+    const auto& tally = s.seen_truths.at(id);
+    w.i64(id);
+    w.count(tally.size());
+    for (int truth : sortedKeys(tally)) {
+      w.i64(truth);
+      w.u64(tally.at(truth));
+    }
+  }
+  w.count(s.provisional.size());
+  for (int id : sortedKeys(s.provisional)) {
+    const Provisional& p = s.provisional.at(id);
+    w.i64(id);
+    w.u64(p.born);
+    w.i64(p.sightings);
+    w.u64(p.held ? 1 : 0);
+    w.fixed(p.mean);
+    w.fixed(p.covariance);
+    w.fixed(p.lever);
+  }
+  writeIds(w, s.touched);
+  writeIds(w, s.started);
+  w.u64(s.refresh_cursor);
+  w.u64(s.scans);
+  return w.bytes();
+}
+
+Associator Associator::restoreState(std::string_view bytes, const std::string& name) {
+  ArchiveReader r(bytes, name);
+  r.section("associator");
+  AssociationOptions options;
+  const std::size_t n_options = r.count("association options", 2);
+  for (std::size_t i = 0; i < n_options; ++i) {
+    const std::string key = r.str("association option");
+    const std::string value = r.str("association option value");
+    const auto table = associationOptions();
+    const auto o = std::find_if(table.begin(), table.end(), [&](const AssociationOption& x) { return x.key == key; });
+    if (o == table.end()) r.fail("unknown association option '" + key + "'");
+    try {
+      o->set(options, value);
+    } catch (const InvalidArgument& e) {
+      r.fail(e.what());
+    }
+  }
+  std::optional<Associator> restored;
+  try {
+    restored.emplace(options);
+  } catch (const InvalidArgument& e) {
+    r.fail(e.what());
+  }
+  Impl& s = *restored->impl_;
+  for (const auto field : kCountFields) s.counts.*field = static_cast<std::size_t>(r.u64("association count"));
+  s.counts.seconds = r.f64("association seconds");
+  const double cell = r.f64("grid cell");
+  if (!(cell >= 0.0) || !std::isfinite(cell)) r.fail("the grid's cell is not a finite length");
+  s.grid.setCell(cell);
+  const std::size_t n_positions = r.count("grid positions", 2 * 9 + 9);
+  if (n_positions > 0 && !s.grid.ready()) r.fail("landmarks indexed in a grid without cells");
+  for (std::size_t i = 0; i < n_positions; ++i) {
+    const int id = readId(r, "grid landmark");
+    Vec2 y;
+    r.fixed("grid position", y, true);
+    s.grid.put(id, y);
+  }
+  const std::size_t n_spreads = r.count("grid spreads", 2 * 9);
+  for (std::size_t i = 0; i < n_spreads; ++i) {
+    const int id = readId(r, "spread landmark");
+    const double sigma = r.f64("spread");
+    if (!(sigma >= 0.0) || !std::isfinite(sigma)) r.fail("landmark " + std::to_string(id) + "'s spread is not a finite length");
+    s.grid.setSpread(id, sigma);
+  }
+  s.slack = r.f64("slack");
+  if (!(s.slack >= 0.0) || !std::isfinite(s.slack)) r.fail("the slack is not a finite length");
+  s.next_id = readId(r, "next landmark id");
+  const std::size_t n_tallies = r.count("truth tallies", 2 * 9);
+  for (std::size_t i = 0; i < n_tallies; ++i) {
+    auto& tally = s.seen_truths[readId(r, "tallied landmark")];
+    const std::size_t n = r.count("truth tally", 2 * 9);
+    for (std::size_t k = 0; k < n; ++k) {
+      const int truth = readId(r, "truth id");
+      tally[truth] = static_cast<std::size_t>(r.u64("truth count"));
+    }
+  }
+  const std::size_t n_provisional = r.count("provisional landmarks", 4 * 9 + 12 * 9);
+  for (std::size_t i = 0; i < n_provisional; ++i) {
+    const int id = readId(r, "provisional landmark");
+    Provisional p;
+    p.born = static_cast<std::size_t>(r.u64("provisional birth scan"));
+    p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, std::numeric_limits<int>::max()));
+    p.held = r.u64Max("provisional held", 1) == 1;
+    r.fixed("provisional mean", p.mean, true);
+    r.fixed("provisional covariance", p.covariance, true);
+    r.fixed("provisional lever", p.lever, true);
+    s.provisional[id] = p;
+  }
+  s.touched = readIds(r, "touched landmarks");
+  s.started = readIds(r, "started landmarks");
+  s.refresh_cursor = static_cast<std::size_t>(r.u64("refresh cursor"));
+  s.scans = static_cast<std::size_t>(r.u64("scans"));
+  r.finish();
+  return std::move(*restored);
 }
 
 }  // namespace seif

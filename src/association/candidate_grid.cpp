@@ -119,4 +119,18 @@ void CandidateGrid::query(const Vec2& c, double radius, double scale, std::vecto
   std::sort(out.begin(), out.end());
 }
 
+std::vector<std::pair<int, Vec2>> CandidateGrid::positions() const {
+  std::vector<std::pair<int, Vec2>> out;
+  out.reserve(where_.size());
+  for (const auto& [id, e] : where_) out.emplace_back(id, e.y);
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
+}
+
+std::vector<std::pair<int, double>> CandidateGrid::spreads() const {
+  std::vector<std::pair<int, double>> out(spread_.begin(), spread_.end());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 }  // namespace seif

@@ -59,6 +59,11 @@ class CandidateGrid {
   /// The ids indexed within `radius + scale * spread(id)` of `c`, ascending.
   void query(const Vec2& c, double radius, double scale, std::vector<int>& out) const;
 
+  // For checkpoints: the cell side, every indexed position and every spread, by id.
+  double cell() const { return cell_; }
+  std::vector<std::pair<int, Vec2>> positions() const;
+  std::vector<std::pair<int, double>> spreads() const;
+
  private:
   struct Entry {
     std::int64_t key;

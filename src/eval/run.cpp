@@ -153,7 +153,14 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
   if (pose_covariances) observers.push_back(&covariances);
   observers.push_back(&dead_reckoning);
   if (progress) observers.push_back(&reporter);
-  CheckpointWriter checkpoints(checkpointing, out);
+  if (resume && !resume->associator.empty() && associator == nullptr) {
+    throw InvalidArgument("resume: the checkpoint carries an associator; the run needs it "
+                          "(Associator::restoreState of RunResume::associator)");
+  }
+  if (resume && resume->associator.empty() && associator && associator->options().method != AssociationMethod::Known) {
+    throw InvalidArgument("resume: the checkpoint was written by a run without association");
+  }
+  CheckpointWriter checkpoints(checkpointing, out, associator);
   if (!checkpointing.path.empty()) observers.push_back(&checkpoints);
   RunLoopOptions options;
   options.stop = stop;

@@ -37,6 +37,7 @@ void CheckpointWriter::save(const SlamFilter& filter, std::size_t steps) const {
   extras.steps_consumed = steps;
   extras.values = policy_.values;
   extras.values[std::string(kRunOutputKey)] = encodeRunOutput(out_);
+  if (associator_) extras.values[std::string(kAssociatorKey)] = associator_->saveState();
   saveCheckpoint(filter, policy_.path, extras);
 }
 
@@ -91,6 +92,7 @@ RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::s
     throw DataError(checkpoint, 0, "the run's outputs hold " + std::to_string(resume.output.steps) + " steps, the filter " +
                                        std::to_string(steps));
   }
+  if (const auto a = values.find(std::string(kAssociatorKey)); a != values.end()) resume.associator = a->second;
   return resume;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // Checkpoints of a streamed run (eval/run.hpp RunCheckpointing, RunResume): the observer
 // that saves them, and the run's outputs so far in the checkpoint's extras.
+#include <seif/association/association.hpp>
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_loop.hpp>
 
@@ -14,7 +15,9 @@ namespace seif {
 /// steps were consumed.
 class CheckpointWriter : public RunObserver {
  public:
-  CheckpointWriter(const RunCheckpointing& policy, const RunOutput& out) : policy_(policy), out_(out) {}
+  /// With `associator`, its state is saved beside the filter (kAssociatorKey).
+  CheckpointWriter(const RunCheckpointing& policy, const RunOutput& out, const Associator* associator = nullptr)
+      : policy_(policy), out_(out), associator_(associator) {}
   void afterUpdate(const SlamFilter& filter, const Step& step, std::size_t k, double seconds) override;
   void onStop(const SlamFilter& filter, std::size_t steps) override { save(filter, steps); }
 
@@ -23,6 +26,7 @@ class CheckpointWriter : public RunObserver {
 
   const RunCheckpointing& policy_;
   const RunOutput& out_;
+  const Associator* associator_;
 };
 
 /// The extras key under which a checkpoint carries the run's outputs so far.

@@ -5,6 +5,7 @@
 #include <seif/eval/run_dataset.hpp>
 #include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
+#include <seif/models/velocity_model.hpp>
 #include "core/files.hpp"
 #include <seif/io/results.hpp>
 
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 
 namespace seif {
 namespace {
@@ -116,7 +118,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
   if (request.smooth) j["smooth"] = true;
   if (r.association) {
     const AssociationCounts& a = *r.association;
-    const AssociationOptions& o = request.association;
+    const AssociationOptions& o = r.association_options;
     j["association"] = toJson(o);  // the options, then what they did
     j["association"].update(nlohmann::json{
         {"observations", a.observations},
@@ -256,6 +258,33 @@ RunErrors evaluateRun(const SlamFilter& filter, const DatasetInfo& info, const R
   return e;
 }
 
+namespace {
+
+/// What selects and shapes the events a dataset yields, as text a checkpoint records:
+/// a resumed run must read the same events.
+std::string datasetOptionsText(const std::string& format, const DatasetOptions& o) {
+  std::ostringstream text;
+  text.precision(17);
+  text << "format " << format << ", robot " << o.robot << ", detections "
+       << detectionsName(o.detections) << ", noise form "
+       << (o.noise_form ? std::string(noiseFormName(*o.noise_form)) : std::string("default"))
+       << ", iSAM landmarks as GTSAM " << (o.isam_landmarks_as_gtsam ? "yes" : "no") << ", noise {";
+  for (const auto& [key, value] : o.noise) text << ' ' << key << ' ' << value;
+  text << " }";
+  return text.str();
+}
+
+/// Every association option as `--key value`, in the table's order.
+std::string associationOptionsText(const AssociationOptions& o) {
+  std::string text;
+  for (const AssociationOption& option : associationOptions()) {
+    text += (text.empty() ? "--" : " --") + std::string(option.key) + " " + option.get(o);
+  }
+  return text;
+}
+
+}  // namespace
+
 RunReport runDataset(const RunRequest& request, const std::filesystem::path& out,
                      const std::function<void(double)>& progress) {
   const auto start = Clock::now();
@@ -274,6 +303,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   checkpointing.every = request.checkpoint_every;
   checkpointing.path = request.checkpoint;
   checkpointing.values = {{"dataset", std::filesystem::absolute(request.dataset).lexically_normal().string()},
+                          {"dataset-options", datasetOptionsText(source->info().format, request.dataset_options)},
                           {"filter", request.filter}};
   std::unique_ptr<SlamFilter> filter;
   std::optional<RunResume> resume;
@@ -285,6 +315,12 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
       throw DataError(name, 0, "the checkpoint is of the run of " + extras.values["dataset"] + ", not of " +
                                    checkpointing.values["dataset"]);
     }
+    // The same events: a checkpoint from before dataset options were recorded is taken as is.
+    if (const auto o = extras.values.find("dataset-options");
+        o != extras.values.end() && o->second != checkpointing.values["dataset-options"]) {
+      throw DataError(name, 0, "the checkpoint's run read its dataset with " + o->second + ", this run with " +
+                                   checkpointing.values["dataset-options"] + " (give the same options)");
+    }
     checkpointing.values["filter"] = extras.values["filter"];
     resume = runResumeFrom(extras.values, static_cast<std::size_t>(extras.steps_consumed), name);
   } else {
@@ -295,15 +331,21 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
     filter = request.smooth ? makeSmoother(spec, source->info().start_pose, config, request.batch)
                             : makeFilter(spec, source->info().start_pose, config);
   }
-  const bool associating = request.association.method != AssociationMethod::Known;
-  if (associating && (!request.checkpoint.empty() || !request.resume.empty())) {
-    throw InvalidArgument("checkpoints: a run with --association nn or jcbb has no checkpoint (the associator's "
-                          "provisional landmarks are not saved)");
+  // A resumed run continues the checkpoint's associator, as it continues its filter.
+  Associator associator = resume && !resume->associator.empty()
+                              ? Associator::restoreState(resume->associator, request.resume.string())
+                              : Associator(request.association);
+  if (resume && request.association.method != AssociationMethod::Known &&
+      associationOptionsText(request.association) != associationOptionsText(associator.options())) {
+    throw InvalidArgument("resume: the checkpoint's run associated with " + associationOptionsText(associator.options()) +
+                          "; this run asks for " + associationOptionsText(request.association) +
+                          " (give its options, or none: a resumed run continues the checkpoint's association)");
   }
-  Associator associator(request.association);
+  report.association_options = associator.options();
+  const bool associating = associator.options().method != AssociationMethod::Known;
   report.output = runFilter(*filter, *source, progress, request.trajectory_covariances, checkpointing,
                             resume ? &*resume : nullptr, &associator, request.stop);
-  if (associating || request.association.drop_unlabelled) report.association = associator.counts();
+  if (associating || associator.options().drop_unlabelled) report.association = associator.counts();
   report.filter = checkpointing.values["filter"];
   report.info = source->info();
   source.reset();

@@ -145,6 +145,9 @@ struct AssociationCounts {
 /// one landmark (SlamFilter::mergeLandmarks). Infinity when Sigma_Delta is singular.
 double correspondenceDistance(const SlamFilter& filter, int a, int b, MarginalMode mode = MarginalMode::Exact);
 
+/// The key of a run checkpoint's extras that holds its associator (Associator::saveState).
+inline constexpr std::string_view kAssociatorKey = "associator";
+
 class Associator {
  public:
   explicit Associator(const AssociationOptions& options);
@@ -165,6 +168,13 @@ class Associator {
   /// when none had one): to score a map against ground truth.
   int truthOf(int id) const;
   const AssociationOptions& options() const;
+
+  /// The associator's whole state - options, counts, index, provisional landmarks, the
+  /// tallies that score it - as checkpoint bytes (a run's checkpoint carries them beside the
+  /// filter, under kAssociatorKey): restoreState() continues it bit for bit.
+  std::string saveState() const;
+  /// The associator saveState() wrote. Throws DataError naming `name` for anything else.
+  static Associator restoreState(std::string_view bytes, const std::string& name);
 
  private:
   struct Impl;

@@ -63,6 +63,9 @@ struct RunCheckpointing {
 struct RunResume {
   std::size_t steps = 0;
   RunOutput output;
+  /// The run's associator (Associator::saveState, under kAssociatorKey), empty when the run
+  /// had none: runFilter continues with Associator::restoreState of it.
+  std::string associator;
 };
 
 /// The run state a checkpoint carries (RunCheckpointing), from the extras load() returns.
@@ -77,7 +80,9 @@ RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::s
 /// the checkpoint's) and the outputs continue resume->output: a resumed run ends with the
 /// same outputs, bit for bit, as the run that was never interrupted (timings aside).
 /// With `associator`, it gives the observations their landmark ids before each update
-/// (and its finish() is called after the run). Once `*stop` is true the run ends before its
+/// (and its finish() is called after the run); checkpoints carry its state, and a resumed
+/// run needs the one its checkpoint carried (RunResume::associator; InvalidArgument when
+/// the checkpoint has one and none is given, or the other way round). Once `*stop` is true the run ends before its
 /// next step, as if that were the end of the data (RunOutput::interrupted), and with a
 /// checkpoint path saves a checkpoint there to resume from.
 RunOutput runFilter(SlamFilter& filter, EventSource& source,

@@ -91,6 +91,8 @@ struct RunReport {
   /// reference: below 1 the filter claims too little variance.
   std::optional<Vec3> filter_covariance_ratio;
   std::optional<AssociationCounts> association;  ///< with nn or jcbb (or drop_unlabelled): what the association did
+  /// The options it ran with: the request's, or a resumed checkpoint's.
+  AssociationOptions association_options;
   /// With nn or jcbb on data with ground-truth poses and landmarks: what the true map and
   /// poses would associate (eval/association_ceiling.hpp).
   std::optional<AssociationCeiling> association_ceiling;
