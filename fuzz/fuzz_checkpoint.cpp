@@ -1,10 +1,13 @@
-// libFuzzer target: checkpoints from memory (seif::loadFromBytes). Each input is loaded
-// twice: as it is, and with its header's payload size and checksum made to match (so that
-// the fuzzer reaches the payload's parser, not only the checksum). Either must load or
-// throw seif::DataError with a printable message; a loaded filter must then take a step.
+// libFuzzer target: checkpoints from memory (seif::loadFromBytes) and the associator state
+// a run's checkpoint carries (seif::Associator::restoreState). Each input is read twice: as
+// it is, and with its header's payload size and checksum made to match (so that the fuzzer
+// reaches the payload's parser, not only the checksum). Either must load or throw
+// seif::DataError with a printable message; a loaded filter must then take a step, and a
+// restored associator must save the bytes it restores to.
 #include "fuzz_checkpoint.hpp"
 #include "fuzz_support.hpp"
 
+#include <seif/association/association.hpp>
 #include <seif/core/errors.hpp>
 #include <seif/filters/checkpoint.hpp>
 
@@ -40,11 +43,30 @@ void loadOrAbort(const std::string& bytes) {
   }
 }
 
+void restoreOrAbort(const std::string& bytes) {
+  std::string saved;
+  try {
+    saved = seif::Associator::restoreState(bytes, "fuzz").saveState();
+  } catch (const seif::DataError& e) {
+    if (!seif::fuzz::isPrintable(e.what())) {
+      std::fprintf(stderr, "unprintable DataError message\n");
+      std::abort();
+    }
+    return;
+  }
+  if (seif::Associator::restoreState(saved, "fuzz").saveState() != saved) {
+    std::fprintf(stderr, "a restored associator does not save what it restores\n");
+    std::abort();
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string bytes(reinterpret_cast<const char*>(data), size);
   loadOrAbort(bytes);
   loadOrAbort(seif::fuzz::resealed(bytes));
+  restoreOrAbort(bytes);
+  restoreOrAbort(seif::fuzz::resealed(bytes));
   return 0;
 }

@@ -6,6 +6,7 @@
 #include "core/binary_archive.hpp"
 #include "scenario.hpp"
 
+#include <seif/association/association.hpp>
 #include <seif/core/errors.hpp>
 #include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
@@ -19,6 +20,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <random>
 #include <sstream>
@@ -410,8 +412,25 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   }
   int seeds = 0;
   for (const auto& entry : fs::directory_iterator(root / "corpus" / "fuzz_checkpoint")) {
+    if (entry.path().extension() != ".ckpt") continue;
     EXPECT_NO_THROW((void)load(entry.path())) << entry.path();
     ++seeds;
+  }
+  // The associator's state a run's checkpoint carries (Associator::saveState; written by
+  // Associator.state_bytes() after 200 steps of the park with clutter, JCBB, held landmarks).
+  std::ifstream file(root / "corpus" / "fuzz_checkpoint" / "associator.state", std::ios::binary);
+  const std::string associator((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  ASSERT_GT(associator.size(), 1000u);
+  EXPECT_TRUE(Associator::restoreState(associator, "associator.state").saveState() == associator);
+  // Every truncation is refused; every flipped byte, resealed, restores or is refused.
+  for (std::size_t n = 0; n < associator.size(); ++n) {
+    EXPECT_THROW((void)Associator::restoreState(associator.substr(0, n), "cut"), DataError) << n;
+    std::string flipped = associator;
+    flipped[n] = static_cast<char>(flipped[n] ^ 0x5A);
+    try {
+      (void)Associator::restoreState(fuzz::resealed(flipped), "flipped");
+    } catch (const DataError&) {
+    }
   }
   EXPECT_GE(seeds, 3);
   for (const auto& entry : fs::directory_iterator(root / "regressions" / "fuzz_checkpoint")) {
