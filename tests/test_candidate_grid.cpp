@@ -95,6 +95,27 @@ TEST(CandidateGrid, AQueryOffersExactlyWhatTheDiscTestOverEveryLandmarkOffers) {
   }
 }
 
+TEST(CandidateGrid, MeansAndReachesFarBeyondTheGridStayExact) {
+  // Cell indices beyond 2^52 are clamped and keys 2^32 cells apart may share a list: the
+  // exact distance test still decides (UBSan checks the conversions in the sanitizer build).
+  CandidateGrid grid;
+  grid.setCell(0.5);
+  grid.put(1, Vec2(1e300, -1e300));
+  grid.put(2, Vec2(0.0, 0.0));
+  grid.put(3, Vec2(0.5 * 0x1p32, 0.0));  // its cell's key is cell 0's
+  grid.setSpread(1, 1e10);
+  std::vector<int> out;
+  grid.query(Vec2(1e300, -1e300), 1.0, 0.0, out);
+  EXPECT_EQ(out, std::vector<int>{1});
+  grid.query(Vec2(0.1, 0.0), 1.0, 0.0, out);
+  EXPECT_EQ(out, std::vector<int>{2});
+  grid.query(Vec2(0.5 * 0x1p32, 0.1), 1.0, 0.0, out);
+  EXPECT_EQ(out, std::vector<int>{3});
+  grid.setSpread(2, std::numeric_limits<double>::infinity());  // a reach of infinity: every cell
+  grid.query(Vec2(5.0, 5.0), 1.0, 1.0, out);
+  EXPECT_EQ(out, std::vector<int>{2});
+}
+
 TEST(CandidateGrid, ASpreadThatIsNotANumberOffersNothingAndHidesNothing) {
   CandidateGrid grid;
   grid.setCell(1.0);

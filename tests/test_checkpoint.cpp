@@ -418,8 +418,8 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   }
   // The associator's state a run's checkpoint carries (Associator::saveState; written by
   // Associator.state_bytes() after 200 steps of the park with clutter, JCBB, held landmarks).
-  std::ifstream file(root / "corpus" / "fuzz_checkpoint" / "associator.state", std::ios::binary);
-  const std::string associator((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  std::ifstream state_file(root / "corpus" / "fuzz_checkpoint" / "associator.state", std::ios::binary);
+  const std::string associator((std::istreambuf_iterator<char>(state_file)), std::istreambuf_iterator<char>());
   ASSERT_GT(associator.size(), 1000u);
   EXPECT_TRUE(Associator::restoreState(associator, "associator.state").saveState() == associator);
   // Every truncation is refused; every flipped byte, resealed, restores or is refused.

@@ -155,8 +155,13 @@ TEST(RunStop, AResumedRunReadsItsDatasetWithTheSameOptions) {
   } catch (const seif::DataError& e) {
     EXPECT_NE(std::string(e.what()).find("sigma_range 0.5"), std::string::npos) << e.what();
   }
-  resume.association.method = seif::AssociationMethod::NearestNeighbour;  // no associator in the checkpoint
+  // Association flags other than the checkpoint's are refused (its known association had
+  // drop_unlabelled off; none given continues it).
   resume.dataset_options = {};
+  resume.association.drop_unlabelled = true;
+  EXPECT_THROW(seif::runDataset(resume, out), seif::InvalidArgument);
+  resume.association.drop_unlabelled = false;
+  resume.association.method = seif::AssociationMethod::NearestNeighbour;
   EXPECT_THROW(seif::runDataset(resume, out), seif::InvalidArgument);
 }
 

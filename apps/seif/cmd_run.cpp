@@ -163,14 +163,15 @@ void run(const RunArgs& args) {
                   metres(d(1)).c_str());
     }
   }
-  if (r.association && args.association.method() == "known") {
+  const std::string association(associationMethodName(r.association_options.method));  // a resumed run's: the checkpoint's
+  if (r.association && association == "known") {
     std::printf("  association known: %zu observations, %zu without a landmark id dropped\n", r.association->observations,
                 r.association->unlabelled_dropped);
   } else if (r.association) {
     const AssociationCounts& a = *r.association;
     std::printf("  association %s: %zu observations; %zu of %zu with a truth id correct (%.2f %%), %zu wrong; "
                 "%zu without one (%zu matched to a labelled landmark)\n",
-                args.association.method().c_str(), a.observations, a.correct, a.scored,
+                association.c_str(), a.observations, a.correct, a.scored,
                 a.scored == 0 ? 0.0 : 100.0 * double(a.correct) / double(a.scored), a.wrong, a.unlabelled,
                 a.unlabelled_matched);
     std::printf("    %zu landmarks started, %zu provisional removed, %zu merged, %zu ambiguous dropped; %zu landmarks at "

@@ -2,16 +2,22 @@
 // pickling of every filter that can be saved (python/seif/__init__.py sets __reduce__).
 #include "bindings.hpp"
 
+#include <seif/eval/run.hpp>
 #include <seif/filters/checkpoint.hpp>
 
 namespace seif::python {
 
 namespace {
 
-/// The extras' values: str where they are UTF-8 text, bytes where they are binary.
+/// The extras' values: bytes for the binary ones a run writes (its outputs, its associator),
+/// whatever their content; str for others that are UTF-8 text, bytes for the rest.
 py::dict valuesToPython(const std::map<std::string, std::string>& values) {
   py::dict out;
   for (const auto& [key, value] : values) {
+    if (key == kRunOutputKey || key == kAssociatorKey) {
+      out[py::str(key)] = py::bytes(value);
+      continue;
+    }
     PyObject* text = PyUnicode_DecodeUTF8(value.data(), static_cast<Py_ssize_t>(value.size()), "strict");
     if (text != nullptr) {
       out[py::str(key)] = py::reinterpret_steal<py::object>(text);

@@ -206,8 +206,10 @@ struct Associator::Impl {
       seen_truths.erase(drop);
       const auto pd = provisional.find(drop);
       const auto pk = provisional.find(keep);
-      if (pk != provisional.end()) {
-        pk->second.sightings += pd != provisional.end() ? pd->second.sightings : options.confirm;
+      if (pk != provisional.end()) {  // at most `confirm`: no overflow whatever confirm is
+        const std::int64_t total =
+            std::int64_t{pk->second.sightings} + (pd != provisional.end() ? pd->second.sightings : options.confirm);
+        pk->second.sightings = static_cast<int>(std::min<std::int64_t>(total, options.confirm));
         if (pk->second.sightings >= options.confirm) provisional.erase(pk);
       }
       forget(drop);
@@ -666,13 +668,13 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
   const std::size_t n_spreads = r.count("grid spreads", 2 * 9);
   for (std::size_t i = 0; i < n_spreads; ++i) {
     const int id = readId(r, "spread landmark");
-    const double sigma = r.f64("spread");
-    if (!(sigma >= 0.0) || !std::isfinite(sigma)) r.fail("landmark " + std::to_string(id) + "'s spread is not a finite length");
+    const double sigma = r.f64("spread");  // +inf: a landmark whose covariance was unbounded
+    if (!(sigma >= 0.0)) r.fail("landmark " + std::to_string(id) + "'s spread is not a length");
     s.grid.setSpread(id, sigma);
   }
   s.slack = r.f64("slack");
   if (!(s.slack >= 0.0) || !std::isfinite(s.slack)) r.fail("the slack is not a finite length");
-  s.next_id = readId(r, "next landmark id");
+  s.next_id = static_cast<int>(r.i64In("next landmark id", 0, std::numeric_limits<int>::max() - 1));
   const std::size_t n_tallies = r.count("truth tallies", 2 * 9);
   for (std::size_t i = 0; i < n_tallies; ++i) {
     auto& tally = s.seen_truths[readId(r, "tallied landmark")];
@@ -687,7 +689,9 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
     const int id = readId(r, "provisional landmark");
     Provisional p;
     p.born = static_cast<std::size_t>(r.u64("provisional birth scan"));
-    p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, std::numeric_limits<int>::max()));
+    // Provisional while seen fewer than `confirm` times (associate() erases it at confirm).
+    if (options.confirm <= 1) r.fail("a provisional landmark, but every landmark is confirmed at once (confirm 1)");
+    p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, options.confirm - 1));
     p.held = r.u64Max("provisional held", 1) == 1;
     r.fixed("provisional mean", p.mean, true);
     r.fixed("provisional covariance", p.covariance, true);
@@ -698,6 +702,9 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
   s.started = readIds(r, "started landmarks");
   s.refresh_cursor = static_cast<std::size_t>(r.u64("refresh cursor"));
   s.scans = static_cast<std::size_t>(r.u64("scans"));
+  for (const auto& [id, p] : s.provisional) {
+    if (p.born > s.scans) r.fail("provisional landmark " + std::to_string(id) + " was started after the last scan");
+  }
   r.finish();
   return std::move(*restored);
 }

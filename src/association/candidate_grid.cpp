@@ -38,7 +38,16 @@ double SpreadBound::max() const {
 }
 
 std::pair<std::int64_t, std::int64_t> CandidateGrid::cellOf(const Vec2& y) const {
-  return {static_cast<std::int64_t>(std::floor(y.x() / cell_)), static_cast<std::int64_t>(std::floor(y.y() / cell_))};
+  // Clamped (monotone, so a box still contains every cell it did): a mean or a reach beyond
+  // 2^52 cells, or not a number, never reaches an integer conversion out of range.
+  constexpr double kFar = 0x1p52;
+  const auto index = [this](double x) {
+    double v = std::floor(x / cell_);
+    if (!(v > -kFar)) v = -kFar;
+    if (!(v < kFar)) v = kFar;
+    return static_cast<std::int64_t>(v);
+  };
+  return {index(y.x()), index(y.y())};
 }
 
 std::int64_t CandidateGrid::keyOf(const Vec2& y) const {

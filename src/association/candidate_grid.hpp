@@ -70,7 +70,11 @@ class CandidateGrid {
     Vec2 y;
   };
   std::pair<std::int64_t, std::int64_t> cellOf(const Vec2& y) const;
-  static std::int64_t pack(std::int64_t i, std::int64_t j) { return (i << 32) ^ (j & 0xffffffff); }
+  /// Distinct cells may share a key (cells 2^32 apart): a key's list then holds both, which
+  /// only adds candidates that the exact distance test drops.
+  static std::int64_t pack(std::int64_t i, std::int64_t j) {
+    return static_cast<std::int64_t>((static_cast<std::uint64_t>(i) << 32) ^ (static_cast<std::uint64_t>(j) & 0xffffffffu));
+  }
   std::int64_t keyOf(const Vec2& y) const;
   void erase(std::int64_t key, int id);
 

@@ -29,8 +29,6 @@ class CheckpointWriter : public RunObserver {
   const Associator* associator_;
 };
 
-/// The extras key under which a checkpoint carries the run's outputs so far.
-inline constexpr std::string_view kRunOutputKey = "run-output";
 
 std::string encodeRunOutput(const RunOutput& out);
 /// Throws DataError naming `name` for bytes encodeRunOutput() did not write.

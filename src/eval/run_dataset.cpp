@@ -335,7 +335,8 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   Associator associator = resume && !resume->associator.empty()
                               ? Associator::restoreState(resume->associator, request.resume.string())
                               : Associator(request.association);
-  if (resume && request.association.method != AssociationMethod::Known &&
+  // Association flags given (the request is not the defaults) must be the checkpoint's.
+  if (resume && associationOptionsText(request.association) != associationOptionsText(AssociationOptions{}) &&
       associationOptionsText(request.association) != associationOptionsText(associator.options())) {
     throw InvalidArgument("resume: the checkpoint's run associated with " + associationOptionsText(associator.options()) +
                           "; this run asks for " + associationOptionsText(request.association) +

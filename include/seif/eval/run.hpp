@@ -52,6 +52,10 @@ struct RunOutput {
 /// every `every` steps the filter and the run so far are saved to `path` (atomically, the
 /// previous one replaced), with `values` recorded beside them (the dataset, the spec).
 /// A run stopped early (runFilter's `stop`) saves one where it stopped, whatever `every`.
+/// The extras key under which a run's checkpoint carries its outputs so far (binary; the
+/// associator's is kAssociatorKey).
+inline constexpr std::string_view kRunOutputKey = "run-output";
+
 struct RunCheckpointing {
   std::size_t every = 0;  ///< 0: never periodically (only where a stopped run stops)
   std::filesystem::path path;
