@@ -346,9 +346,4 @@ AssociationOptions AssociationFlags::resolve() const {
   return o;
 }
 
-std::string AssociationFlags::method() const {
-  const auto it = values.find("association");
-  return it != values.end() ? it->second : "known";
-}
-
 }  // namespace seif::cli

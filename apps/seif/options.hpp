@@ -76,7 +76,6 @@ struct AssociationFlags {
   /// Without `tuning` only the rows that are not tuning (--association, --gate-marginal).
   void add(CLI::App& cmd, bool tuning = true);
   AssociationOptions resolve() const;
-  std::string method() const;  ///< --association as typed
 };
 
 /// The keys a filter spec takes, for --filter's help (from filterOptions()).

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <optional>
 #include <string>
@@ -547,6 +548,8 @@ constexpr std::size_t AssociationCounts::*kCountFields[] = {
     &AssociationCounts::landmarks_final,     &AssociationCounts::spurious_landmarks,
     &AssociationCounts::duplicate_landmarks,
 };
+// A count added to AssociationCounts must be added above (seconds is written apart).
+static_assert(sizeof(AssociationCounts) == std::size(kCountFields) * sizeof(std::size_t) + sizeof(double));
 
 template <class Map>
 std::vector<typename Map::key_type> sortedKeys(const Map& map) {

@@ -7,6 +7,7 @@
 #include <seif/filters/factory.hpp>
 #include <seif/models/velocity_model.hpp>
 #include "core/files.hpp"
+#include "filters/option_values.hpp"
 #include <seif/io/results.hpp>
 
 #include "json_fields.hpp"
@@ -264,12 +265,11 @@ namespace {
 /// a resumed run must read the same events.
 std::string datasetOptionsText(const std::string& format, const DatasetOptions& o) {
   std::ostringstream text;
-  text.precision(17);
   text << "format " << format << ", robot " << o.robot << ", detections "
        << detectionsName(o.detections) << ", noise form "
        << (o.noise_form ? std::string(noiseFormName(*o.noise_form)) : std::string("default"))
        << ", iSAM landmarks as GTSAM " << (o.isam_landmarks_as_gtsam ? "yes" : "no") << ", noise {";
-  for (const auto& [key, value] : o.noise) text << ' ' << key << ' ' << value;
+  for (const auto& [key, value] : o.noise) text << ' ' << key << ' ' << options::formatReal(value);
   text << " }";
   return text.str();
 }
@@ -336,11 +336,12 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
                               ? Associator::restoreState(resume->associator, request.resume.string())
                               : Associator(request.association);
   // Association flags given (the request is not the defaults) must be the checkpoint's.
-  if (resume && associationOptionsText(request.association) != associationOptionsText(AssociationOptions{}) &&
-      associationOptionsText(request.association) != associationOptionsText(associator.options())) {
-    throw InvalidArgument("resume: the checkpoint's run associated with " + associationOptionsText(associator.options()) +
-                          "; this run asks for " + associationOptionsText(request.association) +
-                          " (give its options, or none: a resumed run continues the checkpoint's association)");
+  if (resume) {
+    const std::string asked = associationOptionsText(request.association), ran = associationOptionsText(associator.options());
+    if (asked != associationOptionsText(AssociationOptions{}) && asked != ran) {
+      throw InvalidArgument("resume: the checkpoint's run associated with " + ran + "; this run asks for " + asked +
+                            " (give its options, or none: a resumed run continues the checkpoint's association)");
+    }
   }
   report.association_options = associator.options();
   const bool associating = associator.options().method != AssociationMethod::Known;
