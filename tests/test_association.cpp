@@ -13,6 +13,7 @@
 #include <seif/filters/factory.hpp>
 #include <seif/sim/world.hpp>
 #include "association/scan.hpp"
+#include "forwarding_filter.hpp"
 
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>
@@ -20,6 +21,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 
@@ -277,6 +279,67 @@ Twins runWithAndWithoutAFalseDetection(const std::string& spec, const Associatio
 
 }  // namespace
 
+namespace {
+
+/// An EKF that says its gates should use `gate` and records every marginal mode asked of it.
+class GateRecordingFilter : public test::ForwardingFilter {
+ public:
+  explicit GateRecordingFilter(MarginalMode gate) : gate_(gate) {}
+  Marginal marginal(std::span<const int> ids, bool pose, MarginalMode mode) const override {
+    asked.push_back(mode);
+    return ForwardingFilter::marginal(ids, pose, mode);
+  }
+  MarginalMode gateMarginal() const override { return gate_; }
+
+  mutable std::vector<MarginalMode> asked;
+
+ private:
+  MarginalMode gate_;
+};
+
+/// The marginal modes an associator asks of a filter whose gateMarginal() is `gate`, over
+/// three scans of the same two landmarks.
+std::set<MarginalMode> modesAsked(MarginalMode gate, std::optional<MarginalMode> option) {
+  GateRecordingFilter f(gate);
+  AssociationOptions o;
+  o.method = AssociationMethod::NearestNeighbour;
+  o.marginal = option;
+  Associator a(o);
+  for (std::size_t k = 0; k < 3; ++k) {
+    std::vector<Observation> z = {{1, Vec2(1.0, 0.1), {}}, {2, Vec2(1.5, -0.4), {}}};
+    a.associate(f, k, z);
+    f.update(z);
+  }
+  EXPECT_GE(f.asked.size(), 3u);
+  return {f.asked.begin(), f.asked.end()};
+}
+
+}  // namespace
+
+TEST(Association, UnlessToldTheGatesUseTheFiltersOwnMarginal) {
+  // --gate-marginal auto (AssociationOptions::marginal unset): the filter's gateMarginal().
+  using M = MarginalMode;
+  EXPECT_EQ(modesAsked(M::Local, std::nullopt), std::set<M>{M::Local});
+  EXPECT_EQ(modesAsked(M::Exact, std::nullopt), std::set<M>{M::Exact});
+  EXPECT_EQ(modesAsked(M::Local, M::Exact), std::set<M>{M::Exact});
+  EXPECT_EQ(modesAsked(M::Exact, M::Conservative), std::set<M>{M::Conservative});
+  // The SEIF's own is its constant-time local marginal; the others' the exact one.
+  const FilterConfig config = paperFilterConfig(NoiseModel{});
+  EXPECT_EQ(makeFilter("seif", Pose2::Zero(), config)->gateMarginal(), M::Local);
+  EXPECT_EQ(makeFilter("seif:profile=consistent", Pose2::Zero(), config)->gateMarginal(), M::Local);
+  for (const char* name : {"ekf", "eif", "batch"}) EXPECT_EQ(makeFilter(name, Pose2::Zero(), config)->gateMarginal(), M::Exact) << name;
+  // The option's text: auto is the default and reads back unset.
+  AssociationOptions o;
+  for (const AssociationOption& row : associationOptions()) {
+    if (row.key != "gate-marginal") continue;
+    EXPECT_EQ(row.get(o), "auto");
+    row.set(o, "local");
+    EXPECT_EQ(o.marginal, M::Local);
+    row.set(o, "auto");
+    EXPECT_FALSE(o.marginal.has_value());
+  }
+}
+
 TEST(Association, AnUnconfirmedLandmarkIsRemovedExactly) {
   // The false detection starts a provisional landmark that nothing confirms: after the
   // window the EKF is its twin that never saw it (a first sighting only places the new
@@ -388,9 +451,13 @@ TEST(Association, ALandmarkMappedUncertainIsFoundFromAPoseThatIsNot) {
 
 TEST(Association, AHeldProvisionalLandmarkNeverReachesTheFilter) {
   // Held outside the filter, a false detection that nothing confirms leaves the SEIF exactly
-  // as if it had never been made - not even a removal's round-off.
+  // as if it had never been made - not even a removal's round-off. With exact gates: the
+  // SEIF's local marginal grows its blanket from every variable a scan queries, so the
+  // detection's extra candidates change the grid's spreads, later scans' candidates and the
+  // pose covariance a held estimate fuses with, in the last bits.
   AssociationOptions o;
   o.method = AssociationMethod::NearestNeighbour;
+  o.marginal = MarginalMode::Exact;
   o.provisional = ProvisionalPlace::Held;
   o.window = 5;
   const Twins t = runWithAndWithoutAFalseDetection("seif", o);

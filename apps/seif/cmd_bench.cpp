@@ -125,7 +125,7 @@ void addBenchCommand(CLI::App& app) {
       "steps (the map then holds N - window .. N landmarks); each case runs in its own process.\n"
       "A case whose estimated memory or time (extrapolated from the smaller cases) exceeds the\n"
       "budget is skipped and the reason recorded. With --association nn|jcbb the corridor's ids\n"
-      "are hidden and every scan is associated (the SEIF: --gate-marginal local); its time per\n"
+      "are hidden and every scan is associated (the SEIF gates with its local marginal); its time per\n"
       "scan is reported beside the filter's step time, which excludes it. Writes OUT/bench.json and OUT/bench.png\n"
       "(rendered by scripts/figures/bench.py with /usr/bin/python3 and matplotlib).");
   cmd->add_option("--filters", args->filters, "comma-separated filters: ekf, eif, seif")

@@ -445,7 +445,8 @@ void bindAssociation(py::module_& m) {
       .def_readwrite("method", &AssociationOptions::method)
       .def_readwrite("accept", &AssociationOptions::accept, "chi-square probability of the accept gate")
       .def_readwrite("new_landmark", &AssociationOptions::new_landmark, "chi-square probability of the new-landmark gate")
-      .def_readwrite("marginal", &AssociationOptions::marginal, "MarginalMode the gates use")
+      .def_readwrite("marginal", &AssociationOptions::marginal,
+                     "MarginalMode the gates use; None: the filter's (Local in the SEIF, Exact in the others)")
       .def_readwrite("confirm", &AssociationOptions::confirm, "sightings that confirm a provisional landmark")
       .def_readwrite("window", &AssociationOptions::window, "scans it has to be confirmed in")
       .def_readwrite("provisional", &AssociationOptions::provisional, "ProvisionalPlace: in the filter or held outside it")

@@ -192,13 +192,14 @@ struct Associator::Impl {
       }
     }
     if (pairs.empty()) return;
-    const Marginal joint = filter.marginal(ids, false, options.marginal);
+    const MarginalMode gate = options.marginal.value_or(filter.gateMarginal());
+    const Marginal joint = filter.marginal(ids, false, gate);
     bool merged_any = false;
     int done = -1;  // `id` whose merge ended its pairs
     for (const auto& [id, other] : pairs) {
       if (id == done || !filter.hasLandmark(id) || !filter.hasLandmark(other)) continue;
       // After a merge the joint marginal is stale: the rest are tested one by one.
-      const double d2 = merged_any ? correspondenceDistance(filter, id, other, options.marginal)
+      const double d2 = merged_any ? correspondenceDistance(filter, id, other, gate)
                                    : correspondenceD2(joint, row.at(id), row.at(other));
       if (d2 > merge_d2) continue;
       const int keep = std::min(id, other), drop = std::max(id, other);  // the older stays
@@ -320,7 +321,8 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   s.expireProvisional(filter, s.scans);
 
   const MeasurementModel& sensor = filter.sensorModel();
-  const Marginal pose = filter.marginal({}, true, s.options.marginal);
+  const MarginalMode gate = s.options.marginal.value_or(filter.gateMarginal());
+  const Marginal pose = filter.marginal({}, true, gate);
   const Pose2 x = pose.mean.head<3>();
   // Each observation's world point, and how far from it the new-landmark gate can reach:
   // sqrt(new_d2 * lambda_max(J_x P J_x^T + J_z R J_z^T)) of the inverse model.
@@ -358,7 +360,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   scan.observations = &observations;
   scan.accept_d2 = s.accept_d2;
   scan.accept_probability = s.options.accept;
-  scan.marginal = s.options.marginal;
+  scan.marginal = gate;
   scan.joint_gates = &s.joint_gates;
   scan.compatible.resize(observations.size());
   std::vector<double> nearest(observations.size(), std::numeric_limits<double>::infinity());
@@ -377,7 +379,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
       if (std::find(list.begin(), list.end(), id) == list.end()) list.push_back(id);
     }
   }
-  scan.joint = ids.empty() ? pose : filter.marginal(ids, true, s.options.marginal);
+  scan.joint = ids.empty() ? pose : filter.marginal(ids, true, gate);
   for (std::size_t j = 0; j < ids.size(); ++j) {
     const Eigen::Index r = 3 + 2 * static_cast<Eigen::Index>(j);
     scan.column[ids[j]] = r;

@@ -31,12 +31,15 @@ const std::array<AssociationOption, 12> kOptions = {{
      "(metrics.json \"association\"); docs/association.md",
      [](AssociationOptions& o, std::string_view v) { o.method = parseAssociationMethod(v); },
      [](const AssociationOptions& o) { return std::string(associationMethodName(o.method)); }},
-    {"gate-marginal", "marginal", kChoice, "exact|local|conservative", 0, 0, false,
+    {"gate-marginal", "marginal", kChoice, "auto|exact|local|conservative", 0, 0, false,
      "the covariance the gates use: exact (the marginal), local (H inverted over a blanket around the "
      "pose and the candidates, at most seif:blanket variables more: constant time in the SEIF, smaller "
-     "than the marginal) or conservative (an upper bound, constant time in the SEIF with seif:bounds=true)",
-     [](AssociationOptions& o, std::string_view v) { o.marginal = parseMarginalMode(v); },
-     [](const AssociationOptions& o) { return std::string(marginalModeName(o.marginal)); }},
+     "than the marginal), conservative (an upper bound, constant time in the SEIF with seif:bounds=true) "
+     "or auto (local in the SEIF, exact in the others)",
+     [](AssociationOptions& o, std::string_view v) {
+       o.marginal = v == "auto" ? std::nullopt : std::optional<MarginalMode>(parseMarginalMode(v));
+     },
+     [](const AssociationOptions& o) { return std::string(o.marginal ? marginalModeName(*o.marginal) : "auto"); }},
     {"accept-gate", "accept", kProbability, "", 0, 0, true,
      "chi-square probability (2 dof) inside which an observation may be a landmark",
      [](AssociationOptions& o, std::string_view v) { o.accept = probability("accept-gate", v); },

@@ -40,6 +40,8 @@ class SeifSlam final : public SlamFilter {
   /// state, O(N) at the paper's sparsity). Local: the blanket's dense inverse, O(1).
   Marginal marginal(std::span<const int> landmarks, bool pose = true,
                     MarginalMode mode = MarginalMode::Exact) const override;
+  /// Local: as good as Exact for gating (docs/association.md), in constant time.
+  MarginalMode gateMarginal() const override { return MarginalMode::Local; }
 
   /// SeifStore::marginalizeLandmark (exact; O(d^2) in its d neighbours). Landmarks linked to
   /// it that become linked to the robot count as active: past the bound they are sparsified.

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -57,8 +58,9 @@ struct AssociationOptions {
   /// The covariance the gates use (SlamFilter::marginal): Exact, Local (constant time in
   /// the SEIF, its blanket bounded by SeifOptions::blanket; conditions on the blanket's
   /// outside, so it is never larger than the marginal) or Conservative (an upper bound: the
-  /// SEIF needs SeifOptions::bounds, see needsCovarianceBounds()).
-  MarginalMode marginal = MarginalMode::Exact;
+  /// SEIF needs SeifOptions::bounds, see needsCovarianceBounds()). Unset ("auto"): the
+  /// filter's SlamFilter::gateMarginal(), Local in the SEIF and Exact in the others.
+  std::optional<MarginalMode> marginal;
   /// A new landmark stays provisional until it has been seen `confirm` times (its first
   /// sighting included) within `window` scans (steps with observations) of its first;
   /// otherwise it is removed (from the filter exactly, or dropped when held: `provisional`).

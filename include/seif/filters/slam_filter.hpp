@@ -207,6 +207,12 @@ class SlamFilter {
   virtual Marginal marginal(std::span<const int> landmarks, bool pose = true,
                             MarginalMode mode = MarginalMode::Exact) const = 0;
 
+  /// The marginal a gate uses when not told which (AssociationOptions::marginal unset): the
+  /// cheapest that gates as well as the exact one. Exact here (the EKF reads it off its
+  /// covariance); the SEIF's is Local, constant time where Exact is a sparse factorisation
+  /// per scan (docs/association.md, "Local against exact").
+  virtual MarginalMode gateMarginal() const { return MarginalMode::Exact; }
+
   /// The measurement `sensor` would predict for landmark `id` at the current estimate, and
   /// its innovation covariance S = J Sigma J^T + R over the joint marginal of the pose and the
   /// landmark (marginal(), with its cost). Throws UnknownLandmark for an id not in the map.
