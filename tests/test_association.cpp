@@ -361,38 +361,58 @@ TEST(Association, AScanWhoseUpdateFailedLeavesNoLandmarkBehind) {
   // associator must forget that landmark: no later query or expiry may look for it in the
   // filter (UnknownLandmark), and every landmark it counts as started was in the filter
   // (provisional in the filter) or held.
+  // When the caller also discards the scan (Associator::discardScan), it counts as empty:
+  // held (confirm 2), P is still provisional and the next sighting confirms it under the
+  // same id; in the filter (confirm 4), the next scan starts P again under the same id; the
+  // counts are those before the refused scan.
   const test::Scenario s = test::makeScenario(5, 12, 40);
   const Vec2 P(2.0, -7.0);
-  for (const ProvisionalPlace place : {ProvisionalPlace::Filter, ProvisionalPlace::Held}) {
-    for (const char* spec : {"ekf", "seif"}) {
-      const std::string label = std::string(spec) + ", " + std::string(provisionalPlaceName(place));
-      auto f = makeFilter(spec, s.start, test::configFor(s));
-      AssociationOptions o;
-      o.method = AssociationMethod::NearestNeighbour;
-      o.provisional = place;
-      o.confirm = place == ProvisionalPlace::Held ? 2 : 4;
-      o.window = 5;
-      Associator a(o);
-      const std::size_t refuse = place == ProvisionalPlace::Held ? 4 : 3;
-      std::set<int> in_filter;  // every landmark the filter held after an update
-      for (std::size_t k = 0; k < s.steps.size(); ++k) {
-        f->predict(s.steps[k].u);
-        std::vector<Observation> z = s.steps[k].observations;
-        if (k >= 3) z.push_back({kUnknownLandmark, f->sensorModel().predict(f->pose(), P), std::nullopt});
-        ASSERT_NO_THROW(a.associate(*f, k, z)) << label << ", step " << k;
-        if (k == refuse) {
-          ASSERT_FALSE(z.empty());
-          z.back().noise = Mat2(Vec2(-1.0, 1.0).asDiagonal());  // the filter refuses the scan
-          EXPECT_THROW(f->update(z), ModelError) << label;
-          continue;
+  for (const bool discard : {false, true}) {
+    for (const ProvisionalPlace place : {ProvisionalPlace::Filter, ProvisionalPlace::Held}) {
+      for (const char* spec : {"ekf", "seif"}) {
+        const std::string label = std::string(spec) + ", " + std::string(provisionalPlaceName(place)) +
+                                  (discard ? ", discarded" : "");
+        auto f = makeFilter(spec, s.start, test::configFor(s));
+        AssociationOptions o;
+        o.method = AssociationMethod::NearestNeighbour;
+        o.provisional = place;
+        o.confirm = place == ProvisionalPlace::Held ? 2 : 4;
+        o.window = 5;
+        Associator a(o);
+        const std::size_t refuse = place == ProvisionalPlace::Held ? 4 : 3;
+        int id_p = kUnknownLandmark;
+        std::set<int> in_filter;  // every landmark the filter held after an update
+        for (std::size_t k = 0; k < s.steps.size(); ++k) {
+          f->predict(s.steps[k].u);
+          std::vector<Observation> z = s.steps[k].observations;
+          if (k >= 3) z.push_back({kUnknownLandmark, f->sensorModel().predict(f->pose(), P), std::nullopt});
+          const AssociationCounts before = a.counts();
+          ASSERT_NO_THROW(a.associate(*f, k, z)) << label << ", step " << k;
+          if (k == refuse) {
+            ASSERT_FALSE(z.empty());
+            id_p = z.back().landmark;  // P's (the held one's confirming sighting, or its first)
+            z.back().noise = Mat2(Vec2(-1.0, 1.0).asDiagonal());  // the filter refuses the scan
+            EXPECT_THROW(f->update(z), ModelError) << label;
+            if (discard) {
+              a.discardScan();
+              EXPECT_EQ(a.counts().new_landmarks, before.new_landmarks) << label;
+              EXPECT_EQ(a.counts().ambiguous_dropped, before.ambiguous_dropped) << label;
+            }
+            continue;
+          }
+          ASSERT_NO_THROW(f->update(z)) << label << ", step " << k;
+          in_filter.insert(f->landmarkIds().begin(), f->landmarkIds().end());
+          if (discard && k == refuse + 1) {
+            ASSERT_FALSE(z.empty());
+            EXPECT_EQ(z.back().landmark, id_p) << label;
+            EXPECT_TRUE(f->hasLandmark(id_p)) << label;  // held: confirmed; in the filter: started again
+          }
         }
-        ASSERT_NO_THROW(f->update(z)) << label << ", step " << k;
-        in_filter.insert(f->landmarkIds().begin(), f->landmarkIds().end());
-      }
-      ASSERT_NO_THROW(a.finish(*f)) << label;
-      EXPECT_EQ(a.counts().landmarks_final, f->landmarkIds().size()) << label;
-      if (place == ProvisionalPlace::Filter) {
-        EXPECT_EQ(a.counts().new_landmarks, in_filter.size()) << label;
+        ASSERT_NO_THROW(a.finish(*f)) << label;
+        EXPECT_EQ(a.counts().landmarks_final, f->landmarkIds().size()) << label;
+        if (place == ProvisionalPlace::Filter) {
+          EXPECT_EQ(a.counts().new_landmarks, in_filter.size()) << label;
+        }
       }
     }
   }

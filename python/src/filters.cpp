@@ -511,6 +511,9 @@ void bindAssociation(py::module_& m) {
           },
           py::arg("filter"), py::arg("k"), py::arg("observations"),
           "The observations with their landmark ids (ambiguous ones left out); may remove provisional landmarks")
+      .def("discard_scan", &Associator::discardScan,
+           "The filter refused the last associate()'s observations: forget what they counted (sightings, "
+           "started landmarks, tallies) and go on")
       .def("finish", &Associator::finish, py::arg("filter"))
       .def("truth_of", &Associator::truthOf, py::arg("id"))
       .def_property_readonly("counts", &Associator::counts, py::return_value_policy::copy)

@@ -264,6 +264,27 @@ def test_association_from_python_equals_the_cpp_run(tmp_path, method, place):
     assert all(t >= 6 for t in truths), "every landmark labelled with a tree of the world"
 
 
+def test_a_discarded_scan_counts_nothing():
+    """The filter refuses a scan's update and the caller goes on: discard_scan forgets the
+    landmarks it started, and their ids are given again."""
+    options = seif.AssociationOptions()
+    options.method = seif.AssociationMethod.NearestNeighbour
+    associator = seif.Associator(options)
+    f = seif.make_filter("ekf", np.zeros(3), seif.paper_filter_config(seif.NoiseModel()))
+    scan = [seif.Observation(-1, np.array([0.1, 0.5])), seif.Observation(-1, np.array([0.15, -0.8]))]
+    first = [z.landmark for z in associator.associate(f, 0, scan)]
+    assert associator.counts.new_landmarks == 2
+    associator.discard_scan()
+    assert associator.counts.new_landmarks == 0
+    again = associator.associate(f, 1, scan)
+    assert [z.landmark for z in again] == first
+    f.update(again)
+    associator.associate(f, 2, [])
+    associator.discard_scan()  # once the next scan is associated, nothing is left to discard
+    assert associator.counts.new_landmarks == 2
+    assert sorted(f.landmark_ids()) == sorted(first)
+
+
 def test_the_association_option_table_names_every_attribute():
     """Each row of the table the flags and metrics.json come from is an attribute of
     AssociationOptions, with the same default."""

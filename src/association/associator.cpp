@@ -112,6 +112,52 @@ struct Associator::Impl {
   std::size_t refresh_cursor = 0;
   std::size_t scans = 0;  // steps with observations so far
   std::vector<double> joint_gates;  // JCBB's chi-square(2k) gates (ScanProblem::joint_gates)
+  // What the last scan's observations changed, for discardScan(): the counts and next id
+  // before them, each provisional entry they touched as it was (none: they started it),
+  // the truth tallies they added, and how long touched and started were.
+  struct ScanRecord {
+    bool open = false;
+    AssociationCounts counts;
+    int next_id = 0;
+    std::vector<std::pair<int, std::optional<Provisional>>> provisional;
+    std::vector<std::pair<int, int>> tallies;
+    std::size_t touched = 0, started = 0;
+  } scan_record;
+
+  void recordProvisional(int id) {
+    for (const auto& [kept, before] : scan_record.provisional) {
+      if (kept == id) return;  // the first record is the state before the scan
+    }
+    const auto p = provisional.find(id);
+    scan_record.provisional.emplace_back(id, p == provisional.end() ? std::nullopt : std::optional<Provisional>(p->second));
+  }
+
+  void discardScan() {
+    if (!scan_record.open) return;
+    scan_record.open = false;
+    // Newest first, so each entry returns to its state before the scan.
+    for (auto it = scan_record.provisional.rbegin(); it != scan_record.provisional.rend(); ++it) {
+      const auto& [id, before] = *it;
+      if (before) {
+        provisional[id] = *before;
+      } else {
+        provisional.erase(id);
+      }
+    }
+    for (const auto& [id, truth] : scan_record.tallies) {
+      auto& per_truth = seen_truths[id];
+      if (--per_truth[truth] == 0) per_truth.erase(truth);
+      if (per_truth.empty()) seen_truths.erase(id);
+    }
+    // The landmarks the scan started are gone: from the index, and their ids are free again.
+    for (int id = scan_record.next_id; id < next_id; ++id) grid.remove(id);
+    const double seconds = counts.seconds;
+    counts = scan_record.counts;
+    counts.seconds = seconds;
+    next_id = scan_record.next_id;
+    touched.resize(scan_record.touched);
+    started.resize(scan_record.started);
+  }
 
   void forget(int id) {
     grid.remove(id);
@@ -282,6 +328,8 @@ Associator::~Associator() = default;
 Associator::Associator(Associator&&) noexcept = default;
 Associator& Associator::operator=(Associator&&) noexcept = default;
 
+void Associator::discardScan() { impl_->discardScan(); }
+
 const AssociationCounts& Associator::counts() const { return impl_->counts; }
 const AssociationOptions& Associator::options() const { return impl_->options; }
 int Associator::truthOf(int id) const {
@@ -313,6 +361,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     if (z.truth == kUnknownLandmark) z.truth = z.landmark;
     z.landmark = kUnknownLandmark;
   }
+  s.scan_record.open = false;  // the filter took the last scan, or the caller let it go
   s.counts.observations += observations.size();
   s.dropUnapplied(filter);
   s.refreshIndex(filter);
@@ -431,7 +480,16 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
                                        : assignNearestNeighbour(scan);
   if (truncated) ++s.counts.jcbb_truncated;
 
-  // Apply: matched, new or dropped (scored against the truth at finish()).
+  // Apply: matched, new or dropped (scored against the truth at finish()); recorded for
+  // discardScan().
+  Impl::ScanRecord& record = s.scan_record;
+  record.open = true;
+  record.counts = s.counts;
+  record.next_id = s.next_id;
+  record.provisional.clear();
+  record.tallies.clear();
+  record.touched = s.touched.size();
+  record.started = s.started.size();
   std::vector<Observation> kept;
   kept.reserve(observations.size());
   for (std::size_t i = 0; i < observations.size(); ++i) {
@@ -440,6 +498,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     if (pairing[i] >= 0) {
       z.landmark = pairing[i];
       if (const auto p = s.provisional.find(z.landmark); p != s.provisional.end()) {
+        s.recordProvisional(z.landmark);
         if (p->second.held) {
           s.updateHeld(p->second, sensor, scan.joint, scan.column.at(z.landmark), z);
           apply = p->second.sightings + 1 >= s.options.confirm;
@@ -461,6 +520,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
       z.landmark = s.next_id++;
       ++s.counts.new_landmarks;
       if (s.options.confirm > 1) {
+        s.recordProvisional(z.landmark);
         const bool hold = s.options.provisional == ProvisionalPlace::Held;
         s.provisional[z.landmark] = Provisional{s.scans, 1, hold, point[i], spread[i], lever[i]};
         apply = !hold;
@@ -471,7 +531,9 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
       ++s.counts.ambiguous_dropped;
       continue;
     }
-    ++s.seen_truths[z.landmark][z.truth < 0 ? kUnknownLandmark : z.truth];
+    const int truth = z.truth < 0 ? kUnknownLandmark : z.truth;
+    ++s.seen_truths[z.landmark][truth];
+    record.tallies.emplace_back(z.landmark, truth);
     s.touched.push_back(z.landmark);
     if (apply) kept.push_back(z);
   }
@@ -481,6 +543,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
 
 void Associator::finish(SlamFilter& filter) {
   Impl& s = *impl_;
+  s.scan_record.open = false;
   s.dropUnapplied(filter);
   AssociationCounts& c = s.counts;
   // Landmarks still provisional were not confirmed: the final map holds confirmed ones only

@@ -161,6 +161,13 @@ class Associator {
   /// id, or removes it (dropped as ambiguous); removes the provisional landmarks whose
   /// window has passed. Known: checks every observation has an id and changes nothing.
   void associate(SlamFilter& filter, std::size_t k, std::vector<Observation>& observations);
+  /// The filter refused the update of the last associate()'s observations, and the caller
+  /// goes on: forgets what they counted - their sightings of provisional landmarks (none is
+  /// confirmed by them), the landmarks they started (their ids are given again), the truth
+  /// tallies and counts - as if the scan had been empty. What that associate() did to the
+  /// filter itself (expiries, merges) stays. Does nothing once the next associate() or
+  /// finish() has run. (The run loop stops at a refused update instead.)
+  void discardScan();
   /// After the run: removes the landmarks still provisional (not from a smoother) and
   /// scores the association (landmarks_final, correct, spurious, duplicates, ...).
   void finish(SlamFilter& filter);
