@@ -418,6 +418,31 @@ TEST(Association, AScanWhoseUpdateFailedLeavesNoLandmarkBehind) {
   }
 }
 
+TEST(Association, ADiscardedScanLeavesTheCallersLandmarksIndexed) {
+  // The filter starts with landmark 1 (a caller's map). A scan starts two landmarks - ids 0
+  // and 2, skipping 1 - and is discarded: landmark 1 stays indexed, and the next scan's
+  // sighting of it is matched to it (no cyclic re-indexing, which would put it back in a
+  // map this small).
+  auto f = makeFilter("ekf", Pose2::Zero(), paperFilterConfig(NoiseModel{}));
+  const Observation one{1, Vec2(3.0, 0.0), std::nullopt};
+  f->update(std::vector<Observation>{one});
+  AssociationOptions o;
+  o.method = AssociationMethod::NearestNeighbour;
+  o.refresh = 0;
+  Associator a(o);
+  std::vector<Observation> z = {{kUnknownLandmark, Vec2(3.0, 2.0), std::nullopt},
+                                {kUnknownLandmark, Vec2(3.0, -2.0), std::nullopt}};
+  a.associate(*f, 0, z);
+  ASSERT_EQ(z.size(), 2u);
+  EXPECT_EQ(z[0].landmark, 0);
+  EXPECT_EQ(z[1].landmark, 2);
+  a.discardScan();
+  z = {{kUnknownLandmark, one.z, std::nullopt}};
+  a.associate(*f, 1, z);
+  ASSERT_EQ(z.size(), 1u);
+  EXPECT_EQ(z[0].landmark, 1);
+}
+
 TEST(Association, ALandmarkMappedUncertainIsFoundFromAPoseThatIsNot) {
   // The robot maps landmark L while its pose is uncertain and 1.25 m off, comes back to the
   // landmark it started by (its pose becomes certain; L's mean stays ~0.6 m off, its

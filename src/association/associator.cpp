@@ -113,12 +113,14 @@ struct Associator::Impl {
   std::size_t scans = 0;  // steps with observations so far
   std::vector<double> joint_gates;  // JCBB's chi-square(2k) gates (ScanProblem::joint_gates)
   // What the last scan's observations changed, for discardScan(): the counts and next id
-  // before them, each provisional entry they touched as it was (none: they started it),
-  // the truth tallies they added, and how long touched and started were.
+  // before them, the landmarks they started, each provisional entry they touched as it was
+  // (none: they started it), the truth tallies they added, and how long touched and started
+  // were.
   struct ScanRecord {
     bool open = false;
     AssociationCounts counts;
     int next_id = 0;
+    std::vector<int> fresh;
     std::vector<std::pair<int, std::optional<Provisional>>> provisional;
     std::vector<std::pair<int, int>> tallies;
     std::size_t touched = 0, started = 0;
@@ -149,8 +151,9 @@ struct Associator::Impl {
       if (--per_truth[truth] == 0) per_truth.erase(truth);
       if (per_truth.empty()) seen_truths.erase(id);
     }
-    // The landmarks the scan started are gone: from the index, and their ids are free again.
-    for (int id = scan_record.next_id; id < next_id; ++id) grid.remove(id);
+    // The landmarks the scan started are gone: from the index, and their ids are free again
+    // (next_id skips those a caller's map held before, which stay indexed).
+    for (int id : scan_record.fresh) grid.remove(id);
     const double seconds = counts.seconds;
     counts = scan_record.counts;
     counts.seconds = seconds;
@@ -486,6 +489,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   record.open = true;
   record.counts = s.counts;
   record.next_id = s.next_id;
+  record.fresh.clear();
   record.provisional.clear();
   record.tallies.clear();
   record.touched = s.touched.size();
@@ -518,6 +522,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     } else if (nearest[i] > s.new_d2) {
       while (filter.hasLandmark(s.next_id)) ++s.next_id;  // ids the filter held before (a caller's map)
       z.landmark = s.next_id++;
+      record.fresh.push_back(z.landmark);
       ++s.counts.new_landmarks;
       if (s.options.confirm > 1) {
         s.recordProvisional(z.landmark);
