@@ -328,6 +328,8 @@ TEST(Association, UnlessToldTheGatesUseTheFiltersOwnMarginal) {
   EXPECT_EQ(makeFilter("seif", Pose2::Zero(), config)->gateMarginal(), M::Local);
   EXPECT_EQ(makeFilter("seif:profile=consistent", Pose2::Zero(), config)->gateMarginal(), M::Local);
   for (const char* name : {"ekf", "eif", "batch"}) EXPECT_EQ(makeFilter(name, Pose2::Zero(), config)->gateMarginal(), M::Exact) << name;
+  // The batch gates, before it solves, with the marginals of the filter it starts from.
+  EXPECT_EQ(makeFilter("batch:init=seif", Pose2::Zero(), config)->gateMarginal(), M::Local);
   // The option's text: auto is the default and reads back unset.
   AssociationOptions o;
   for (const AssociationOption& row : associationOptions()) {
@@ -337,6 +339,7 @@ TEST(Association, UnlessToldTheGatesUseTheFiltersOwnMarginal) {
     EXPECT_EQ(o.marginal, M::Local);
     row.set(o, "auto");
     EXPECT_FALSE(o.marginal.has_value());
+    EXPECT_THROW(row.set(o, "nearest"), InvalidArgument);
   }
 }
 

@@ -47,6 +47,17 @@ ProvisionalPlace parseProvisionalPlace(std::string_view s) {
 
 std::string_view provisionalPlaceName(ProvisionalPlace p) { return p == ProvisionalPlace::Held ? "held" : "filter"; }
 
+std::string_view gateMarginalName(std::optional<MarginalMode> m) { return m ? marginalModeName(*m) : "auto"; }
+
+std::optional<MarginalMode> parseGateMarginal(std::string_view s) {
+  if (s == "auto") return std::nullopt;
+  try {
+    return parseMarginalMode(s);
+  } catch (const InvalidArgument&) {
+    throw InvalidArgument("unknown gate marginal '" + std::string(s) + "' (expected auto, exact, local or conservative)");
+  }
+}
+
 bool needsCovarianceBounds(const AssociationOptions& o) {
   return o.method != AssociationMethod::Known && o.marginal == MarginalMode::Conservative;
 }
@@ -162,6 +173,9 @@ struct Associator::Impl {
     started.resize(scan_record.started);
   }
 
+  /// The marginal the gates use: the option's, or the filter's own (auto).
+  MarginalMode gateOf(const SlamFilter& filter) const { return options.marginal.value_or(filter.gateMarginal()); }
+
   void forget(int id) {
     grid.remove(id);
     provisional.erase(id);
@@ -241,7 +255,7 @@ struct Associator::Impl {
       }
     }
     if (pairs.empty()) return;
-    const MarginalMode gate = options.marginal.value_or(filter.gateMarginal());
+    const MarginalMode gate = gateOf(filter);
     const Marginal joint = filter.marginal(ids, false, gate);
     bool merged_any = false;
     int done = -1;  // `id` whose merge ended its pairs
@@ -373,7 +387,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   s.expireProvisional(filter, s.scans);
 
   const MeasurementModel& sensor = filter.sensorModel();
-  const MarginalMode gate = s.options.marginal.value_or(filter.gateMarginal());
+  const MarginalMode gate = s.gateOf(filter);
   const Marginal pose = filter.marginal({}, true, gate);
   const Pose2 x = pose.mean.head<3>();
   // Each observation's world point, and how far from it the new-landmark gate can reach:

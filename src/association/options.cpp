@@ -36,10 +36,8 @@ const std::array<AssociationOption, 12> kOptions = {{
      "pose and the candidates, at most seif:blanket variables more: constant time in the SEIF, smaller "
      "than the marginal), conservative (an upper bound, constant time in the SEIF with seif:bounds=true) "
      "or auto (local in the SEIF, exact in the others)",
-     [](AssociationOptions& o, std::string_view v) {
-       o.marginal = v == "auto" ? std::nullopt : std::optional<MarginalMode>(parseMarginalMode(v));
-     },
-     [](const AssociationOptions& o) { return std::string(o.marginal ? marginalModeName(*o.marginal) : "auto"); }},
+     [](AssociationOptions& o, std::string_view v) { o.marginal = parseGateMarginal(v); },
+     [](const AssociationOptions& o) { return std::string(gateMarginalName(o.marginal)); }},
     {"accept-gate", "accept", kProbability, "", 0, 0, true,
      "chi-square probability (2 dof) inside which an observation may be a landmark",
      [](AssociationOptions& o, std::string_view v) { o.accept = probability("accept-gate", v); },

@@ -487,7 +487,7 @@ std::string benchJson(const BenchReport& report) {
                                  {"iterations", args.iterations},
                                  {"seif", toJson(args.seif)},
                                  {"association", associationMethodName(args.association.method)},
-                                 {"gate_marginal", args.association.marginal ? marginalModeName(*args.association.marginal) : "auto"}};
+                                 {"gate_marginal", gateMarginalName(args.association.marginal)}};
   const nlohmann::json doc = {{"machine", machineJson()},
                               {"config", config},
                               {"results", results},

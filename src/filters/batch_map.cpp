@@ -354,6 +354,10 @@ void BatchMap::mergeLandmarks(int, int) {
   throw InvalidArgument("batch: landmarks cannot be merged in the batch MAP (it keeps every measurement)");
 }
 
+MarginalMode BatchMap::gateMarginal() const {
+  return !solution_ && inner_ ? inner_->gateMarginal() : MarginalMode::Exact;
+}
+
 Marginal BatchMap::marginal(std::span<const int> landmarks, bool pose, MarginalMode mode) const {
   if (!solution_) {
     if (inner_) return inner_->marginal(landmarks, pose, mode);

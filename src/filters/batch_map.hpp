@@ -82,6 +82,8 @@ class BatchMap final : public SlamFilter {
 
   Marginal marginal(std::span<const int> landmarks, bool pose = true,
                     MarginalMode mode = MarginalMode::Exact) const override;
+  /// Before finish(): the filter the batch starts from (its marginals answer); then Exact.
+  MarginalMode gateMarginal() const override;
   /// Not supported: the batch keeps every measurement (InvalidArgument).
   void removeLandmark(int id) override;
   void mergeLandmarks(int keep, int drop) override;

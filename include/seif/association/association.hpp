@@ -91,6 +91,11 @@ struct AssociationOptions {
 /// its covariance bounds kept (SeifOptions::bounds): `seif run` and `seif bench` turn them on.
 bool needsCovarianceBounds(const AssociationOptions& o);
 
+/// AssociationOptions::marginal as text: "auto" when unset, else marginalModeName(); and back
+/// (InvalidArgument naming the valid names).
+std::string_view gateMarginalName(std::optional<MarginalMode> m);
+std::optional<MarginalMode> parseGateMarginal(std::string_view s);
+
 /// One option of data association. The table of them (associationOptions()) is the single
 /// description the CLI's flags (`--<key>`), metrics.json's "association" object and Python's
 /// table (seif.association_options()) come from; `attribute` names the AssociationOptions
