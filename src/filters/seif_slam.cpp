@@ -39,6 +39,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
   }
   if (options_.covariance == SeifOptions::Covariance::Conservative) options_.bounds = true;
   order_.reserve(kMaxLocalLandmarks + 1);
+  observed_slots_.reserve(64);
   bound_slots_.reserve(kMaxLocalLandmarks + 1);
   ranking_.reserve(kMaxLocalLandmarks + 1);
   if (options.sparsify == SeifOptions::Sparsify::Eseif) {
@@ -296,6 +297,14 @@ void SeifSlam::applyUpdate(std::span<const Observation> observations, const Meas
     }
     flushMotion();
   }
+  // The step's solves of the robot-active block differ only in the rows of the robot and the
+  // observed landmarks (motion is in, the relinearisations and sparsification change no
+  // other): the rest is factored once (SeifStore::holdFixedPart).
+  observed_slots_.clear();
+  for (const Observation& z : observations) {
+    if (const int slot = book_.find(z.landmark); slot >= 0) observed_slots_.push_back(slot);
+  }
+  store_.holdFixedPart(observed_slots_);
   const ActiveBlock block = std::exchange(block_, ActiveBlock::Stale);
   if (amortized && book_order) recoverMean(true, block);
   if (config_.linearization == Linearization::Invariant) reanchor(observations);

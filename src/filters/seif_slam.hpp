@@ -251,6 +251,7 @@ class SeifSlam final : public SlamFilter {
   LocalMatrix overclaim_h_;          // and its information before eq. (44-51)
   LocalGauge gauge_;                 // the block's free directions (keepGauge)
   BoundWorkspace bound_ws_;
+  std::vector<int> observed_slots_;  // an update's observed mapped landmarks (holdFixedPart())
   std::size_t sparsifications_ = 0;  // deactivateSurplus() calls that deactivated landmarks
   /// The robot-active block as the next update finds it (ActiveBlock). Every change of the
   /// store but the two that set it makes it Stale.

@@ -29,6 +29,7 @@ SeifStore::SeifStore(const Mat3& H_xx, const Vec3& mu_x)
 
 void SeifStore::beginTransaction() {
   settleCoarse();
+  fixed_part_.release();
   Journal& j = journal_;
   j.open = true;
   ++j.id;
@@ -54,7 +55,10 @@ void SeifStore::beginTransaction() {
   j.means_saved = false;
 }
 
-void SeifStore::commitTransaction() { journal_.open = false; }
+void SeifStore::commitTransaction() {
+  journal_.open = false;
+  fixed_part_.release();
+}
 
 SeifStore::Node& SeifStore::write(int slot) {
   touchCoarse(slot);
@@ -110,6 +114,7 @@ SeifStore::LinkBlock& SeifStore::writeLink(int slot, std::size_t index) {
 }
 
 void SeifStore::rollbackTransaction() {
+  fixed_part_.release();
   Journal& j = journal_;
   if (!j.open) return;
   if (j.means_saved) {
@@ -187,6 +192,10 @@ void SeifStore::addToLink(int a, int c, const Mat2& H_ac) {
     *link(c, a) += H_ac.transpose();
     return;
   }
+  addLink(a, c, H_ac);
+}
+
+void SeifStore::addLink(int a, int c, const Mat2& H_ac) {
   Node& na = write(a);
   Node& nc = write(c);
   na.links.push_back({c, H_ac});
@@ -653,7 +662,7 @@ void SeifStore::scatter() {
       if (linked[a].test(c)) continue;
       const Mat2 block = local_H_.block<2, 2>(3 + 2 * i, 3 + 2 * j);
       if (block.cwiseAbs().maxCoeff() > 0.0) {
-        addToLink(gathered_[a], gathered_[c], block);
+        addLink(gathered_[a], gathered_[c], block);  // not linked (above): no search
         if (row_kept[a]) row_change[a].noalias() += block * basis[c];
         if (row_kept[c]) row_change[c].noalias() += block.transpose() * basis[a];
       }
@@ -759,12 +768,18 @@ void SeifStore::solveLocalMean(Passive passive) {
     passive_current_ = true;
   }
   local_rhs_ = local_b_ - local_passive_;
-  const SmallLLT<LocalMatrix> llt(local_H_);
-  if (llt.info() != Eigen::Success) {
+  bool ok = true;
+  if (fixed_part_.held()) {  // holdFixedPart(): the rows the step does not change factored once
+    ok = fixed_part_.solve(local_H_, local_rhs_, gathered_, local_mu_);
+  } else {
+    const SmallLLT<LocalMatrix> llt(local_H_);
+    ok = llt.info() == Eigen::Success;
+    if (ok) local_mu_ = llt.solve(local_rhs_);
+  }
+  if (!ok) {
     throw NumericError("seif: the information of the robot and its active landmarks is not "
                        "positive definite at step " + std::to_string(step_));
   }
-  local_mu_ = llt.solve(local_rhs_);
   mu_x_ = local_mu_.head<3>();
   for (std::size_t i = 0; i < gathered_.size(); ++i) {
     assignMean(gathered_[i], local_mu_.segment<2>(3 + 2 * static_cast<Eigen::Index>(i)));

@@ -5,6 +5,7 @@
 // The filter's steps work on a small dense block gathered from it (the robot and listed
 // landmarks, at most kMaxLocalLandmarks) and scattered back; the amortised mean relaxes one
 // variable at a time on it (eq. 42). Only new landmarks and new links allocate.
+#include "filters/fixed_part_solver.hpp"
 #include "filters/information_ops.hpp"
 #include "filters/landmark_book.hpp"
 #include <seif/filters/slam_filter.hpp>
@@ -220,6 +221,10 @@ class SeifStore {
   /// have changed (the iterated update, between its relinearisations).
   enum class Passive { Recompute, Reuse };
   void solveLocalMean(Passive passive = Passive::Recompute);
+  /// Until the transaction ends: the landmarks whose rows of H the step may change between
+  /// its solveLocalMean() calls; the block's other rows are factored once for all of them
+  /// (FixedPartSolver: the same solution, rounded differently).
+  void holdFixedPart(std::span<const int> changing) { fixed_part_.hold(changing); }
   /// addObservation() on the store and on the gathered block, which holds `slot`.
   void addObservationInBlock(int slot, const Eigen::Matrix<double, 5, 5>& H, const Eigen::Matrix<double, 5, 1>& b);
   /// gatherActive(); solveLocalMean().
@@ -259,6 +264,8 @@ class SeifStore {
   void requireNoTransaction(const char* what) const;
   /// H_{a,c} for a change (write(a)), or nullptr when they are not linked.
   LinkBlock* link(int a, int c);
+  /// Links a and c, not linked yet, with H_{a,c} = H_ac (addToLink() without its search).
+  void addLink(int a, int c, const Mat2& H_ac);
   void gatherListed();  // gather() of gathered_
   /// Marks each gathered landmark with its position (block_position_) for the life of the
   /// object, so that a node's links to the block are found in one pass over its links.
@@ -313,6 +320,7 @@ class SeifStore {
   // (GatheredMarks): 4 bytes a landmark, so the scans of links read a compact array.
   std::vector<int> block_position_;
   bool passive_current_ = false;  // local_passive_ holds the gathered block's, in its order
+  FixedPartSolver fixed_part_;    // solveLocalMean() while a step holds a fixed part
   std::vector<std::pair<int, Vec2>> reanchor_q_;  // applyReanchor()'s landmark entries
 
   // The coarse level (above): the map's frame offset beta, the origin o of the rotations,
