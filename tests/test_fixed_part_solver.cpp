@@ -144,6 +144,30 @@ TEST(FixedPartSolver, RefactorsWhenARowItWasNotToldOfChanges) {
   EXPECT_EQ(s.factorizations(), 3u);
 }
 
+TEST(FixedPartSolver, OneHoldOverMoreChangingLandmarksThanABlockHolds) {
+  // A batch of observations larger than the block, sparsified as it comes: one hold sees
+  // blocks of thirty fixed landmarks and ten changing ones, a different ten each time (more
+  // column blocks of W than fit at once).
+  std::mt19937 rng(17);
+  constexpr int kRounds = 8;
+  FixedPartSolver s;
+  std::vector<int> changing;
+  for (int k = 0; k < kRounds; ++k) {
+    for (int i = 0; i < 10; ++i) changing.push_back(1000 * (k + 1) + i);
+  }
+  s.hold(changing);
+  const Block fixed_part = randomBlock(40, rng);
+  for (int k = 0; k < kRounds; ++k) {
+    Block b = fixed_part;
+    for (int i = 0; i < 10; ++i) b.slots[static_cast<std::size_t>(30 + i)] = 1000 * (k + 1) + i;
+    std::vector<int> positions(10);
+    std::iota(positions.begin(), positions.end(), 30);
+    changeRows(b, positions, rng);  // H_UU unchanged; H_CC differs from round to round
+    EXPECT_LT(relativeError(viaFixedPart(s, b), direct(b)), 1e-10) << "round " << k;
+  }
+  EXPECT_EQ(s.factorizations(), 1u);
+}
+
 TEST(FixedPartSolver, RefusesABlockThatIsNotPositiveDefinite) {
   std::mt19937 rng(13);
   for (int where : {0, 3, 8}) {  // the robot (changing), a held landmark, a fixed one

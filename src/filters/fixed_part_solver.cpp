@@ -93,6 +93,12 @@ bool FixedPartSolver::solve(const LocalMatrix& H, const LocalVector& r, std::spa
     Eigen::Index col = 0;
     for (; k < w_keys_.size() && w_keys_[k] != key; ++k) col += w_keys_[k] < 0 ? 3 : 2;
     const bool known = k < w_keys_.size();
+    if (!known && col + width > W_.MaxColsAtCompileTime) {
+      // More changing variables in one hold than a block holds (a batch sparsified as it
+      // came): the cache starts again (this solve's columns are already in Wc_).
+      w_keys_.clear();
+      col = 0;
+    }
     if (!known) {
       w_keys_.push_back(key);
       W_.conservativeResize(nu, col + width);
