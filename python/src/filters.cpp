@@ -331,6 +331,10 @@ void bindSlamFilter(py::module_& m) {
           "Exact: the posterior's marginal; Local: H inverted over a blanket around them (the SEIF's "
           "bounded by SeifOptions.blanket: constant time), never larger than Exact; Conservative: an upper "
           "bound, never smaller than Exact (the SEIF's kept in constant time). Raises UnknownLandmark.")
+      .def("gate_marginal", &SlamFilter::gateMarginal,
+           "The MarginalMode an Associator's gates use with this filter when AssociationOptions.marginal "
+           "is None: Local in the SEIF (constant time), Exact in the EKF and EIF, and in the batch once "
+           "it has solved (before, the one of the filter it starts from).")
       .def("remove_landmark", &SlamFilter::removeLandmark, py::arg("id"),
            "Takes the landmark out of the map exactly (its marginal out of the posterior).")
       .def("merge_landmarks", &SlamFilter::mergeLandmarks, py::arg("keep"), py::arg("drop"),

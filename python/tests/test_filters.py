@@ -285,6 +285,17 @@ def test_a_discarded_scan_counts_nothing():
     assert sorted(f.landmark_ids()) == sorted(first)
 
 
+def test_each_filter_names_the_marginal_its_gates_default_to():
+    """AssociationOptions.marginal = None gates with the filter's own marginal: the SEIF's local
+    one (constant time), the exact one elsewhere; the batch before it solves uses its start's."""
+    config = seif.paper_filter_config(seif.NoiseModel())
+    M = seif.MarginalMode
+    expected = {"seif": M.Local, "seif:profile=consistent": M.Local, "ekf": M.Exact, "eif": M.Exact,
+                "batch": M.Exact, "batch:init=seif": M.Local}
+    for spec, mode in expected.items():
+        assert seif.make_filter(spec, np.zeros(3), config).gate_marginal() == mode, spec
+
+
 def test_the_association_option_table_names_every_attribute():
     """Each row of the table the flags and metrics.json come from is an attribute of
     AssociationOptions, with the same default."""
