@@ -7,6 +7,7 @@
 #include <seif/core/errors.hpp>
 #include "filters/seif_slam.hpp"
 #include <seif/eval/run_loop.hpp>
+#include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
 
 #include <gtest/gtest.h>
@@ -228,6 +229,38 @@ TEST(DeferredMotion, FinishAppliesTheHeldControls) {
   EXPECT_EQ(deferred->stats().links, immediate->stats().links);
   EXPECT_EQ(deferred->stats().robot_links, immediate->stats().robot_links);
   EXPECT_LT((deferred->pose() - immediate->pose()).norm(), 1e-9);
+}
+
+TEST(DeferredMotion, AQueryBetweenObservationsDoesNotMakeTheNextEmptyUpdateSolveTheBlock) {
+  // The first update without observations after one with solves the robot-active block, later
+  // ones the robot alone (with relax=0 nothing else but the robot's re-anchoring). A query that
+  // applies the held controls (settle(), as association does before each scan) leaves that
+  // count alone, and a checkpoint carries it (version 14).
+  const test::Scenario s = test::makeScenario(6, 40, 60, 4.0);
+  const std::string spec = "seif:profile=consistent,relax=0";
+  auto plain = makeFilter(spec, s.start, test::configFor(s));
+  auto queried = makeFilter(spec, s.start, test::configFor(s));
+  const std::vector<Observation> none;
+  for (std::size_t k = 0; k < 10; ++k) {
+    plain->step(s.steps[k].u, s.steps[k].observations);
+    queried->step(s.steps[k].u, s.steps[k].observations);
+  }
+  ASSERT_FALSE(s.steps[9].observations.empty());
+  ASSERT_GT(plain->stats().robot_links, 0u);
+  plain->step(s.steps[10].u, none);  // the first empty update: the block
+  queried->predict(s.steps[10].u);
+  queried->settle();  // as before association: the control applied
+  ASSERT_EQ(dynamic_cast<const SeifSlam&>(*queried).heldControls(), 0u);
+  queried->update(none);  // still the first after the observation: the block
+  const std::size_t block = queried->stats().blocks_touched;
+  // Resumed from a checkpoint here, as well as straight on.
+  auto resumed = loadFromBytes(saveToBytes(*queried), "memory");
+  for (auto* f : {plain.get(), queried.get(), resumed.get()}) f->step(s.steps[11].u, none);  // the second
+  const std::size_t robot_alone = plain->stats().blocks_touched;
+  EXPECT_LT(robot_alone + 3 * queried->stats().robot_links, block);
+  EXPECT_EQ(queried->stats().blocks_touched, robot_alone);
+  EXPECT_EQ(resumed->stats().blocks_touched, robot_alone);
+  EXPECT_TRUE(queried->mean() == resumed->mean());
 }
 
 TEST(DeferredMotion, SettleAppliesTheHeldControlsAndTheRunLoopSettlesBeforeAssociation) {

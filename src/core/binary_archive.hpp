@@ -22,7 +22,7 @@
 namespace seif {
 
 inline constexpr std::string_view kArchiveMagic = "SEIFCKPT";
-inline constexpr std::uint32_t kArchiveVersion = 13;  // 2: the config no longer holds noise sigmas; 3: seif blanket;
+inline constexpr std::uint32_t kArchiveVersion = 14;  // 2: the config no longer holds noise sigmas; 3: seif blanket;
                                                       // 4: seif covariance bounds; 5: seif deferred motion;
                                                       // 6: seif conservative sparsification's scale;
                                                       // 7: seif gauge rule; 8: seif mean's coarse level;
@@ -30,7 +30,8 @@ inline constexpr std::uint32_t kArchiveVersion = 13;  // 2: the config no longer
                                                       // 10: whether the seif's robot-active block is solved;
                                                       // 11: seif stale-first deactivation;
                                                       // 12: seif mean's over-relaxation;
-                                                      // 13: seif wildfire relaxation order
+                                                      // 13: seif wildfire relaxation order;
+                                                      // 14: seif controls since the last observation
 inline constexpr std::size_t kArchiveHeaderSize = 32;
 
 /// FNV-1a 64 of `bytes` (the payload checksum).

@@ -63,6 +63,9 @@ class SeifSlam final : public SlamFilter {
   void settle() override { settleMotion(); }
   /// Motion::Deferred: the controls held since the last motion update (0 when settled).
   std::size_t heldControls() const { return pending_controls_; }
+  /// Motion::Deferred: the controls since the last update with observations, held or applied
+  /// by a query since (an update without observations solves the block while it is <= 1).
+  std::size_t controlsSinceObservation() const { return controls_since_observation_; }
   std::size_t robotLinks() const override { return store_.robotLinks().size(); }
   std::size_t rejectedObservations() const override { return book_.rejected(); }
   std::size_t blocksTouched() const override { return store_.blocksTouched(); }
@@ -229,6 +232,10 @@ class SeifSlam final : public SlamFilter {
   /// and how many controls they hold.
   std::optional<MotionIncrement> pending_motion_;
   std::size_t pending_controls_ = 0;
+  /// Motion::Deferred: the controls since the last update with observations, whether or not
+  /// a query has applied them since (pending_controls_ counts only those still held). An
+  /// update without observations solves the robot-active block when this is at most 1.
+  std::size_t controls_since_observation_ = 0;
   double information_scale_ = 1.0;  // kappa (informationScale())
   std::size_t scalings_ = 0;        // sparsifications that raised kappa
 

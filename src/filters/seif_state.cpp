@@ -219,6 +219,7 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifSlam& f) {
     out.fixed(f.pending_motion_->U);
     out.u64(f.pending_controls_);
   }
+  out.u64(f.controls_since_observation_);  // Motion::Deferred: whether the next empty update solves the block
   out.f64(f.information_scale_);  // Sparsify::Conservative's kappa
   out.u64(f.scalings_);
   // Whether the next update skips that block's solve (a Gathered block is in buffers a
@@ -269,6 +270,10 @@ void CheckpointAccess::read(ArchiveReader& in, SeifSlam& f) {
     if (f.pending_controls_ == 0) in.fail("a deferred motion of no controls");
     f.pending_motion_ = m;
   }
+  // Earlier files: the controls still held (what the rule counted before version 14).
+  f.controls_since_observation_ =
+      in.version() >= 14 ? static_cast<std::size_t>(in.u64("controls since the last observation")) : f.pending_controls_;
+  if (f.controls_since_observation_ < f.pending_controls_) in.fail("fewer controls since the last observation than held");
   f.information_scale_ = 1.0;
   f.scalings_ = 0;
   if (in.version() >= 6) {
