@@ -132,7 +132,11 @@ void SeifSlam::applyMotion(const MotionIncrement& m) {
   store_.scatter();
   store_.moveRobotAnchor(m.delta.head<2>());  // T(a + d) T(a)^-1 is the standard G (invariant.hpp)
   invalidateFactor();
-  block_ = ActiveBlock::Gathered;  // the buffers hold what scatter() wrote
+  // The buffers hold what scatter() wrote. A block Solved before stays solved: the motion
+  // carries the residual b - H mu through (informationMotionUpdate), zero on the robot's rows
+  // and the passive terms on the landmarks', and moves the robot's mean by delta, so a solve
+  // would give the same mean back up to rounding.
+  block_ = block_ == ActiveBlock::Solved ? ActiveBlock::Solved : ActiveBlock::Gathered;
 }
 
 void SeifSlam::flushMotion() {

@@ -153,8 +153,8 @@ class SeifSlam final : public SlamFilter {
   /// What the store's robot-active block is at the start of an update (block_):
   /// Stale - read it again; Gathered - applyMotion() left it gathered as the store holds it
   /// (its solve needs no gather); Solved - the last update's sparsification solved its mean
-  /// and keeps it (b~ = b + (H~ - H) mu within the block), so solving it again would give the
-  /// mean back up to rounding.
+  /// and keeps it (b~ = b + (H~ - H) mu within the block), as the motion since keeps it, so
+  /// solving it again would give the mean back up to rounding.
   enum class ActiveBlock { Stale, Gathered, Solved };
   /// §2, amortised, eq. (42); without `with_active` the robot alone and the K landmarks
   /// (updates without observations while motion is deferred, after the first); with the
