@@ -505,7 +505,8 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   // Version 14 added the controls since the last observation (deferred motion): older files
   // count the controls they hold, as their build did.
   for (const char* file : {"seif-coarse-v13.ckpt", "seif-coarse.ckpt"}) {
-    const auto& f = dynamic_cast<const SeifSlam&>(*load(root / "corpus" / "fuzz_checkpoint" / file));
+    const auto loaded = load(root / "corpus" / "fuzz_checkpoint" / file);
+    const auto& f = dynamic_cast<const SeifSlam&>(*loaded);
     EXPECT_EQ(f.controlsSinceObservation(), f.heldControls()) << file;  // nothing applied them early
   }
 }
