@@ -251,7 +251,9 @@ class BlanketIndex {
   }
 
  private:
-  static std::vector<int>& table() {
+  // Not inlined: inlined, GCC recomputes a thread_local's address (a call into the dynamic
+  // linker in a shared library) at each use instead of keeping it.
+  [[gnu::noinline]] static std::vector<int>& table() {
     thread_local std::vector<int> t;
     return t;
   }
@@ -296,7 +298,7 @@ class WorkspaceLease {
   BlanketWorkspace& operator*() const { return ws_; }
 
  private:
-  static BlanketWorkspace& workspace() {
+  [[gnu::noinline]] static BlanketWorkspace& workspace() {  // as BlanketIndex::table()
     thread_local BlanketWorkspace w;
     return w;
   }
@@ -399,9 +401,13 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
     offset[a] = next;
     next += dim(order[a]);
   }
+  // Only its lower triangle is assembled (and zeroed): the Cholesky factorisation and the
+  // solves with its factor read no other (small_llt.hpp). A link's block lies wholly on one
+  // side of the diagonal.
   const Eigen::Index n = next;
-  ws.h.assign(static_cast<std::size_t>(n * n), 0.0);
+  ws.h.resize(static_cast<std::size_t>(n * n));
   Eigen::Map<Eigen::MatrixXd> H(ws.h.data(), n, n);
+  for (Eigen::Index j = 0; j < n; ++j) H.col(j).tail(n - j).setZero();
   for (std::size_t a = 0; a < order.size(); ++a) {
     const Eigen::Index da = dim(order[a]);
     H.block(offset[a], offset[a], da, da) = diagonal(order[a]);
@@ -412,8 +418,11 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
       const auto c = static_cast<std::size_t>(found);
       const Eigen::Index dc = dim(l.var);
       const Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> B(l.block, da, dc, Eigen::OuterStride<>(l.stride));
-      H.block(offset[a], offset[c], da, dc) = B;
-      H.block(offset[c], offset[a], dc, da) = B.transpose();
+      if (offset[c] > offset[a]) {
+        H.block(offset[c], offset[a], dc, da) = B.transpose();
+      } else {
+        H.block(offset[a], offset[c], da, dc) = B;
+      }
     }
   }
   const auto indefinite = [&] {
