@@ -371,6 +371,24 @@ TEST_F(MrclamCorrupt, ExtraField) {
   expectError("Robot2_Measurement.dat", kFirstDataLine + 1, "found 5");
 }
 
+TEST_F(MrclamCorrupt, ABearingOfMoreThanATurn) {
+  replaceLine(file("Robot2_Measurement.dat"), kFirstDataLine + 2, "1248444187.356\t107\t1.5\t1e300");
+  expectError("Robot2_Measurement.dat", kFirstDataLine + 2, "angle '1e300' rad in column 4 (bearing) is more than a turn");
+}
+
+TEST_F(MrclamCorrupt, NoBarcode) {
+  std::ofstream(file("Barcodes.dat")) << "# Subject #    Barcode #\n";
+  expectError("Barcodes.dat", 1, "no barcode listed");
+}
+
+TEST_F(MrclamCorrupt, AByteOrderMarkIsNotData) {
+  std::ifstream in(file("Robot2_Odometry.dat"), std::ios::binary);
+  const std::string odometry((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  writeText(file("Robot2_Odometry.dat"), "\xEF\xBB\xBF" + odometry);
+  EXPECT_EQ(readMrclam(dir(), 2).odometry.size(), syntheticLog().odometry.size());
+}
+
 TEST_F(MrclamCorrupt, NaN) {
   replaceLine(file("Robot2_Measurement.dat"), kFirstDataLine + 2, "1248444187.356\t107\tnan\t0.1");
   expectError("Robot2_Measurement.dat", kFirstDataLine + 2, "non-finite number 'nan' in column 3 (range)");

@@ -45,11 +45,15 @@ void consistencyCommand(const ConsistencyArgs& args) {
   options.threads = static_cast<unsigned>(args.jobs);
   options.posterior_mean = args.posterior_mean;
   for (const std::string& f : splitFilterList(args.filters)) options.filters.push_back(parseFilterSpec(f));
+  if (args.dataset.empty()) checkConsistencyOptions(options);  // a usage error, before --out is made
   requireOutputFolder(args.out);
   const std::filesystem::path dir(args.out);
 
   if (!args.dataset.empty()) {
     options.datasets = mrclamConsistencyRuns(args.dataset, args.robots);
+    checkConsistencyOptions(options);
+  }
+  if (!args.dataset.empty()) {
     std::printf("seif consistency: %s, robots", args.dataset.c_str());
     for (int r : args.robots) std::printf(" %d", r);
     std::printf(" (Vicon poses and surveyed landmarks the truth)\n");

@@ -193,6 +193,11 @@ void run(const RunArgs& args) {
   }
   std::printf("  wrote %s/{trajectory.tum,dead_reckoning.tum,map.csv,metrics.json%s}\n", args.out.c_str(),
               r.filter_errors ? ",trajectory_filter.tum,map_filter.csv" : "");
+  if (out.failure) {  // its one line on stderr follows (exit status 2)
+    std::printf("  the run failed at step %zu: the outputs above cover the steps before it\n", out.steps);
+    std::fflush(stdout);
+    std::rethrow_exception(out.failure);
+  }
   if (out.interrupted) {
     std::fflush(stdout);
     std::string what = "run interrupted after " + std::to_string(out.steps) + " steps: the outputs above cover them";
@@ -265,11 +270,13 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--checkpoint", args->checkpoint,
                   "the checkpoint file (binary, versioned; replaced atomically each time; docs/checkpoints.md).\n"
                   "Ctrl-C (or SIGTERM) stops a run after the step it is in, writes the outputs so far and,\n"
-                  "with --checkpoint, a checkpoint there to --resume from; exit status 130");
+                  "with --checkpoint, a checkpoint there to --resume from; exit status 130")
+      ->check(nonEmptyPath());
   cmd->add_option("--resume", args->resume,
                   "resume the run saved in this checkpoint (same --dataset, --robot, --detections and\n"
                   "noise flags): the filter and the association are the checkpoint's, the steps it\n"
-                  "consumed are skipped, and the outputs equal those of the uninterrupted run");
+                  "consumed are skipped, and the outputs equal those of the uninterrupted run")
+      ->check(nonEmptyPath());
   cmd->add_flag("--smooth", args->smooth,
                  "after the filter, the batch MAP from the filter's estimate (the batch's flags below\n"
                  "set its solver): the smoothed trajectory and map are the outputs, the filter's are written\n"

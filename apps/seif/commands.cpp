@@ -4,6 +4,7 @@
 #include <seif/core/version.hpp>
 
 #include <cstdio>
+#include <new>
 #include <filesystem>
 #include <stdexcept>
 
@@ -32,7 +33,7 @@ int main(int argc, char** argv) {
       "  seif bench --filters ekf,seif --landmarks 100,1000 --out out/bench\n\n"
       "Datasets: MRCLAM, Victoria Park, iSAM and g2o (see README). Exit status: 0 success, 1 usage\n"
       "error, 2 bad input data or a numerical failure (one line on stderr names the cause), 130\n"
-      "interrupted (Ctrl-C: `seif run` writes what it has run first)."};
+      "interrupted (Ctrl-C). Stopped or failed part-way, `seif run` first writes what it ran."};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("seif ") + kVersion);
   addSimulateCommand(app);
@@ -66,6 +67,10 @@ int main(int argc, char** argv) {
     return 1;
   } catch (const Error& e) {
     std::fprintf(stderr, "seif: %s\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "seif: out of memory (the run needs more than this machine has: a smaller "
+                         "problem, or fewer runs at once with --jobs)\n");
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "seif: error: %s\n", e.what());

@@ -58,6 +58,11 @@ CLI::Validator positiveFinite() {
       "FINITE > 0");
 }
 
+CLI::Validator nonEmptyPath() {
+  return CLI::Validator([](std::string& input) -> std::string { return input.empty() ? "must not be empty" : ""; },
+                        "PATH");
+}
+
 CLI::Validator integerIn(long long lo, long long hi) {
   const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   return CLI::Validator(
@@ -109,7 +114,16 @@ void requireOutputFolder(const std::string& out) {
 }
 
 void NoiseFlags::add(CLI::App& cmd) {
-  const CLI::Validator positive = positiveFinite();
+  // A standard deviation whose variance and information are finite and not zero
+  // (resolveNoise() holds the same bounds for every source).
+  const CLI::Validator positive(
+      [](std::string& input) -> std::string {
+        const auto v = parseAll<double>(input);
+        if (!v || !isPositiveFinite(*v)) return "must be finite and > 0, found " + input;
+        if (*v < 1e-100 || *v > 1e100) return "must be in [1e-100, 1e100], found " + input;
+        return {};
+      },
+      "FINITE > 0");
   const struct {
     const char* flag;
     const char* name;

@@ -26,6 +26,8 @@ namespace seif::cli {
 bool isPositiveFinite(double v);
 /// A decimal number satisfying isPositiveFinite: the sigma flags and bench's budgets.
 CLI::Validator positiveFinite();
+/// A path that is not empty (an empty one would silently mean "not given").
+CLI::Validator nonEmptyPath();
 /// A decimal integer in [lo, hi] (no fraction, exponent, nan or inf), passed on to the
 /// conversion in canonical form (so 010 is ten). Add it with Option::transform(): check()
 /// would drop the canonical form.

@@ -195,12 +195,14 @@ void bindRun(py::module_& m) {
           throw py::error_already_set();
         }
         if (failure) std::rethrow_exception(failure);
+        if (report.output.failure) std::rethrow_exception(report.output.failure);  // the outputs are written
         return report;
       },
       py::arg("request"), py::arg("out_dir"), py::arg("progress") = py::none(),
       "`seif run` as one call: writes trajectory.tum, dead_reckoning.tum, map.csv, metrics.json into "
       "out_dir (which must exist) and returns a RunReport. progress(fraction) is called during the run. "
-      "Raises DataError, NumericError, InvalidArgument. Ctrl-C stops the run after the step it is in: the "
+      "Raises DataError, NumericError, InvalidArgument; a failure after the first step raises once the "
+      "outputs of the steps before it are written (metrics.json \"failure\"). Ctrl-C stops the run after the step it is in: the "
       "outputs so far are written (metrics.json \"interrupted\": true; with request.checkpoint a checkpoint "
       "to resume from), then KeyboardInterrupt is raised.");
 
@@ -217,11 +219,17 @@ void bindRun(py::module_& m) {
       "run_filter",
       [](SlamFilter& filter, EventSource& source, const py::object& progress, bool pose_covariances) {
         const auto callback = pythonCallback<double>(progress);
-        py::gil_scoped_release release;
-        return runFilter(filter, source, callback, pose_covariances);
+        RunOutput out;
+        {
+          py::gil_scoped_release release;
+          out = runFilter(filter, source, callback, pose_covariances);
+        }
+        if (out.failure) std::rethrow_exception(out.failure);  // the filter holds the steps before it
+        return out;
       },
       py::arg("filter"), py::arg("source"), py::arg("progress") = py::none(), py::arg("pose_covariances") = false,
-      "Streams an EventSource through `filter` (built with source.info's models); progress(fraction).");
+      "Streams an EventSource through `filter` (built with source.info's models); progress(fraction). "
+      "A failure raises its error; `filter` then holds the steps before it.");
 
   m.def("start_pose", &startPose, py::arg("dataset"), "Ground truth at the first step's time, else the origin.");
   m.def("dead_reckoning", &deadReckoning, py::arg("dataset"), py::arg("start"), py::arg("motion"),

@@ -143,3 +143,51 @@ def test_exception_in_progress_callback_propagates(simulated_folder, tmp_path):
     data, _ = seif.simulated_dataset("paper", steps=30)
     with pytest.raises(Stop):
         seif.run_filter(seif.make_filter("ekf", seif.start_pose(data), PAPER), data, stop)
+
+
+def test_summaries_and_studies_refuse_what_they_cannot_read():
+    """Out-of-range indices and empty datasets raise instead of reading past the end."""
+    with pytest.raises(seif.InvalidArgument, match="no runs"):
+        seif.summarize_paper_filter(0, [])
+    options = seif.PaperOptions()
+    options.landmarks, options.steps = 10, 20
+    run = seif.run_paper_experiment(1, options)
+    with pytest.raises(seif.InvalidArgument, match="filter 3 of runs with 3 filters"):
+        seif.summarize_paper_filter(3, [run])
+    dataset = seif.ConsistencyDataset()
+    dataset.name = "empty"
+    dataset.config = PAPER
+    study = seif.ConsistencyOptions()
+    study.datasets = [dataset]
+    study.threads = 1
+    study.filters = [seif.parse_filter_spec("ekf")]
+    with pytest.raises(seif.InvalidArgument, match="'empty' holds no step"):
+        seif.run_consistency(study)
+
+
+def test_models_and_filters_refuse_bad_noise_and_start():
+    with pytest.raises(seif.InvalidArgument, match="finite and > 0"):
+        seif.RangeBearingModel(-0.1, 0.1)
+    with pytest.raises(seif.InvalidArgument, match="finite and > 0"):
+        seif.diagonal_noise(-1.0, float("nan"))
+    for spec in ("ekf", "seif"):
+        f = seif.make_filter(spec, np.zeros(3), PAPER)
+        lopsided = np.array([[1.0, 5.0], [0.0, 1.0]])
+        with pytest.raises(seif.InvalidArgument, match="not symmetric"):
+            f.update([seif.Observation(1, np.array([1.0, 0.1]), lopsided)])
+        assert f.landmark_ids() == []
+    with pytest.raises(seif.InvalidArgument, match="start pose is not finite"):
+        seif.make_filter("seif", np.array([np.nan, 0.0, 0.0]), PAPER)
+    config = seif.paper_filter_config(seif.NoiseModel())
+    config.initial_pose_sigma = np.array([np.nan, 0.1, 0.1])
+    with pytest.raises(seif.InvalidArgument, match="initial_pose_sigma"):
+        seif.make_filter("ekf", np.zeros(3), config)
+
+
+def test_a_dataset_built_in_memory_has_its_stamps_checked():
+    data = seif.Dataset()
+    step = seif.Step(1.0, seif.VelocityControl(0.1, 0.0, 1.0), [])
+    late = seif.Step(float("nan"), seif.VelocityControl(0.1, 0.0, 1.0), [])
+    data.steps = [step, late]
+    with pytest.raises(seif.InvalidArgument, match="step 1's time nan"):
+        seif.run_filter(seif.make_filter("ekf", np.zeros(3), PAPER), data)

@@ -12,8 +12,12 @@ gps.csv), each trajectory and its map are moved by
 the rigid 2-D motion that best aligns the trajectory, interpolated at the GPS stamps, to the
 fixes (least squares, as metrics.json's gps_rmse); the first run's dead reckoning is drawn
 aligned the same way (its own best fit). Without --gps, everything is drawn as estimated.
+Each input is checked before drawing (fields per row, finite numbers, map.csv's header and
+positive semi-definite covariances, at least one pose); the first problem is printed as one
+line `run_map.py: FILE:LINE: what is wrong (found 'TEXT')` and the script exits with status 2.
 Exits with status 3 when matplotlib is not installed.
 """
+import math
 import sys
 from pathlib import Path
 
@@ -32,31 +36,100 @@ except ImportError:
 COLORS = ["tab:red", "tab:blue", "tab:green", "tab:purple"]
 
 
-def read_table(path, columns):
-    rows = [l.split() for l in Path(path).read_text().splitlines() if l.strip() and not l.lstrip().startswith("#")]
-    return np.array([[float(v) for v in r[:columns]] for r in rows]).reshape(-1, columns)
+class InputError(Exception):
+    """A corrupt input; its text is `FILE:LINE: what is wrong (found 'TEXT')`."""
+
+
+def fail(path, line, what, found):
+    raise InputError(f"{path}:{line}: {what} (found '{found}')")
+
+
+def read_lines(path, comments=False):
+    """The non-blank lines of `path` as (line number, stripped text); '#' lines left out if `comments`."""
+    try:
+        text = Path(path).read_text(errors="replace")
+    except OSError as e:
+        fail(path, 0, "cannot be read", e.strerror)
+    lines = [(n, l.strip()) for n, l in enumerate(text.split("\n"), 1) if l.strip()]
+    return [(n, l) for n, l in lines if not (comments and l.startswith("#"))]
+
+
+def read_rows(path, lines, count, sep=None):
+    """The rows of `lines` as an array of `count` finite numbers each (fields split at `sep`)."""
+    rows = []
+    for n, line in lines:
+        fields = line.split(sep)
+        if len(fields) != count:
+            fail(path, n, f"expected {count} fields, got {len(fields)}", line)
+        values = []
+        for f in fields:
+            try:
+                values.append(float(f))
+            except ValueError:
+                fail(path, n, "not a number", f.strip())
+            if not math.isfinite(values[-1]):
+                fail(path, n, "not a finite number", f.strip())
+        rows.append(values)
+    return np.array(rows).reshape(-1, count)
+
+
+def check_header(path, lines, headers):
+    """The first line of `lines`, which must be one of `headers`."""
+    n, line = lines[0] if lines else (1, "")
+    if line not in headers:
+        fail(path, n, "expected the header " + " or ".join(f"'{h}'" for h in headers), line)
+    return line
+
+
+def check_not_empty(path, rows, what):
+    """`rows` has at least one row (else the file has no `what`)."""
+    if len(rows) == 0:
+        fail(path, 1, f"no {what} in the file", "")
+
+
+def read_tum(path):
+    """(time, x, y) of each pose of a TUM file (`t x y z qx qy qz qw`, '#' comments); at least one."""
+    rows = read_rows(path, read_lines(path, comments=True), 8)
+    check_not_empty(path, rows, "pose")
+    return rows[:, :3]
 
 
 def read_gps(path):
-    """GPS fixes (time, x, y): a CSV with a header line, or a whitespace table."""
-    text = Path(path).read_text()
-    if text.lstrip().startswith("time,"):
-        rows = [l.split(",") for l in text.splitlines()[1:] if l.strip()]
-        return np.array([[float(v) for v in r[:3]] for r in rows]).reshape(-1, 3)
-    return read_table(path, 3)
+    """GPS fixes (time, x, y): a CSV with the header "time,x,y", or a whitespace table ('#' comments)."""
+    lines = read_lines(path, comments=True)
+    if lines and "," in lines[0][1]:
+        check_header(path, lines, ["time,x,y"])
+        rows = read_rows(path, lines[1:], 3, ",")
+    else:
+        rows = read_rows(path, lines, 3)
+    check_not_empty(path, rows, "GPS fix")
+    return rows
+
+
+MAP_HEADERS = ["id,x,y", "id,x,y,cov_xx,cov_xy,cov_yy"]  # as src/io/results.cpp writes map.csv
 
 
 def read_map(path):
     """Landmark positions (N x 2) and their 2x2 covariances (N x 2 x 2, or None without)."""
-    lines = Path(path).read_text().splitlines()
-    header = lines[0].split(",") if lines else []
-    rows = [[float(v) for v in l.split(",")] for l in lines[1:] if l.strip()]
-    xy = np.array([r[1:3] for r in rows]).reshape(-1, 2)
-    if "cov_xx" not in header:
-        return xy, None
-    i, j, k = header.index("cov_xx"), header.index("cov_xy"), header.index("cov_yy")
-    cov = np.array([[[r[i], r[j]], [r[j], r[k]]] for r in rows]).reshape(-1, 2, 2)
-    return xy, cov
+    lines = read_lines(path)
+    header = check_header(path, lines, MAP_HEADERS)
+    rows = read_rows(path, lines[1:], header.count(",") + 1, ",")
+    if header == MAP_HEADERS[0]:
+        return rows[:, 1:3], None
+    for (n, line), (vxx, vxy, vyy) in zip(lines[1:], rows[:, 3:6]):
+        # positive semi-definite, up to the 9 significant digits map.csv is written with
+        if min(vxx, vyy) < 0:
+            fail(path, n, f"negative variance {'cov_xx' if vxx < 0 else 'cov_yy'}", line)
+        if abs(vxy) > math.sqrt(vxx * vyy) * (1 + 1e-6):
+            fail(path, n, "covariance not positive semi-definite: |cov_xy| > sqrt(cov_xx cov_yy)", line)
+    return rows[:, 1:3], rows[:, [3, 4, 4, 5]].reshape(-1, 2, 2)
+
+
+def read_run(d, dead_reckoning):
+    """A run folder's trajectory, map, map covariances and (if asked and present) dead reckoning."""
+    traj, (lm, lm_cov) = read_tum(d / "trajectory.tum"), read_map(d / "map.csv")
+    dr_file = d / "dead_reckoning.tum"
+    return traj, lm, lm_cov, read_tum(dr_file) if dead_reckoning and dr_file.exists() else None
 
 
 CHI2_95_2DOF = 5.991  # the 95 % quantile of chi-square with 2 degrees of freedom
@@ -98,11 +171,11 @@ def main(argv):
         print(__doc__, file=sys.stderr)
         return 1
     out = argv[1]
-    gps, title, runs, ellipses = None, "", [], False
+    gps_file, title, runs, ellipses = None, "", [], False
     i = 2
     while i < len(argv):
         if argv[i] == "--gps":
-            gps = read_gps(argv[i + 1])
+            gps_file = argv[i + 1]
             i += 2
         elif argv[i] == "--ellipses":
             ellipses = True
@@ -114,12 +187,16 @@ def main(argv):
             d, _, label = argv[i].partition("=")
             runs.append((Path(d), label or Path(d).name))
             i += 1
+    try:  # every input is read and checked before anything is drawn
+        gps = read_gps(gps_file) if gps_file else None
+        inputs = [read_run(d, k == 0) for k, (d, _) in enumerate(runs)]
+    except InputError as e:
+        print(f"run_map.py: {e}", file=sys.stderr)
+        return 2
     fig, ax = plt.subplots(figsize=(9, 8))
     if gps is not None:
         ax.plot(gps[:, 1], gps[:, 2], ".", color="0.6", ms=2.5, label=f"GPS fixes ({len(gps)})", zorder=1)
-    for k, (d, label) in enumerate(runs):
-        traj = read_table(d / "trajectory.tum", 3)
-        lm, lm_cov = read_map(d / "map.csv")
+    for k, ((_, label), (traj, lm, lm_cov, dr)) in enumerate(zip(runs, inputs)):
         R, t, note = np.eye(2), np.zeros(2), ""
         if gps is not None:
             R, t, rmse = aligned(traj, gps)
@@ -132,9 +209,7 @@ def main(argv):
         if ellipses and lm_cov is not None:
             draw_ellipses(ax, m, R @ lm_cov @ R.T, c)
             ax.plot([], [], "-", color=c, lw=0.5, label=f"{label} 95 % ellipses")
-        dr_file = d / "dead_reckoning.tum"
-        if k == 0 and dr_file.exists():
-            dr = read_table(dr_file, 3)
+        if dr is not None:
             Rd, td, note = np.eye(2), np.zeros(2), ""
             if gps is not None:
                 Rd, td, rmse = aligned(dr, gps)

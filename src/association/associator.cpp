@@ -334,6 +334,13 @@ Associator::Associator(const AssociationOptions& options) : impl_(std::make_uniq
   if (!(o.accept > 0.0) || o.new_landmark < o.accept) {  // each below 1: the table's range
     throw InvalidArgument("association: gates need 0 < accept <= new_landmark < 1 (chi-square probabilities)");
   }
+  // Seen once a scan at most, a landmark born at scan b has its confirm-th sighting at scan
+  // b + confirm - 1 at the earliest, and expires after scan b + window.
+  if (o.confirm > 1 && o.window < o.confirm - 1) {
+    throw InvalidArgument("association: --window " + std::to_string(o.window) + " can never confirm a landmark (--confirm " +
+                          std::to_string(o.confirm) + " needs a window of at least " + std::to_string(o.confirm - 1) +
+                          " scans)");
+  }
   impl_->options = options;
   const auto chi2 = [](double p) { return -2.0 * std::log1p(-p); };  // chi-square(2) quantile, closed form
   impl_->accept_d2 = chi2(o.accept);

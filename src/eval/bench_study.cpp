@@ -323,6 +323,7 @@ const BenchMeasurement* find(const std::vector<BenchMeasurement>& all, const std
 
 BenchReport runBench(const BenchRequest& request, const std::function<void(const BenchRow&)>& row_done) {
   if (request.filters.empty()) throw InvalidArgument("bench: no filter to measure");
+  for (const std::string& f : request.filters) (void)stepCostExponent(f);  // an unknown one, before any work
   if (request.landmarks.empty()) throw InvalidArgument("bench: no map size to measure");
   for (int n : request.landmarks) {
     if (n < 1) throw InvalidArgument("bench: the number of landmarks must be >= 1 (got " + std::to_string(n) + ")");

@@ -238,12 +238,30 @@ std::vector<ConsistencyDataset> mrclamConsistencyRuns(const std::filesystem::pat
   return out;
 }
 
-ConsistencyResult runConsistency(const ConsistencyOptions& options,
-                                 const std::function<void(std::size_t, std::size_t)>& progress) {
+void checkConsistencyOptions(const ConsistencyOptions& options) {
   const bool real = !options.datasets.empty();
   if (!real && options.runs < 1) throw InvalidArgument("consistency: runs must be >= 1");
   if (options.samples < 1) throw InvalidArgument("consistency: samples must be >= 1");
   if (options.filters.empty()) throw InvalidArgument("consistency: no filter given");
+  for (const ConsistencyDataset& d : options.datasets) {  // NEES needs steps and the truth
+    if (d.data.steps.empty()) throw InvalidArgument("consistency: dataset '" + d.name + "' holds no step");
+    if (d.data.groundtruth.empty() || d.data.landmarks.empty()) {
+      throw InvalidArgument("consistency: dataset '" + d.name + "' has no ground truth to measure NEES against");
+    }
+    if (!d.config.motion || !d.config.sensor) {
+      throw InvalidArgument("consistency: dataset '" + d.name + "' has no motion or sensor model in its config");
+    }
+  }
+  if (!real && options.world.seed > std::numeric_limits<std::uint64_t>::max() - static_cast<std::uint64_t>(options.runs - 1)) {
+    throw InvalidArgument("consistency: seed + runs - 1 must be at most " +
+                          std::to_string(std::numeric_limits<std::uint64_t>::max()) + " (the seeds would wrap)");
+  }
+}
+
+ConsistencyResult runConsistency(const ConsistencyOptions& options,
+                                 const std::function<void(std::size_t, std::size_t)>& progress) {
+  checkConsistencyOptions(options);
+  const bool real = !options.datasets.empty();
   const std::size_t runs = real ? options.datasets.size() : static_cast<std::size_t>(options.runs);
   const std::size_t nf = options.filters.size();
   std::vector<std::vector<FilterRun>> results(runs);  // [run][filter]
@@ -430,11 +448,21 @@ std::string consistencyCsv(const ConsistencyResult& r) {
   std::ostringstream csv;
   csv.precision(10);
   csv << "filter,step,pose,landmark,pose_relative,landmark_relative\n";
+  // What was not measured (no landmark in view, a stopped run) is an empty cell, as
+  // nees.json's null.
+  const auto cell = [&csv](double v) -> std::ostringstream& {
+    csv << ',';
+    if (std::isfinite(v)) csv << v;
+    return csv;
+  };
   for (const ConsistencyFilterResult& f : r.filters) {
     for (std::size_t s = 0; s < r.sample_steps.size(); ++s) {
       const NeesPoint& p = f.nees[s];
-      csv << '"' << f.name << "\"," << r.sample_steps[s] << ',' << p.pose << ',' << p.landmark << ','
-          << p.pose_relative << ',' << p.landmark_relative << '\n';
+      csv << '"' << f.name << "\"," << r.sample_steps[s];
+      cell(p.pose);
+      cell(p.landmark);
+      cell(p.pose_relative);
+      cell(p.landmark_relative) << '\n';
     }
   }
   return csv.str();

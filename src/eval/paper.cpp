@@ -195,6 +195,13 @@ FilterSnapshot snapshotById(const SlamFilter& filter) {
 }
 
 PaperFilterSummary summarizePaperFilter(std::size_t f, const std::vector<PaperRun>& runs) {
+  if (runs.empty()) throw InvalidArgument("summarizePaperFilter: no runs to summarise");
+  for (const PaperRun& run : runs) {
+    if (f >= run.filters.size()) {
+      throw InvalidArgument("summarizePaperFilter: filter " + std::to_string(f) + " of runs with " +
+                            std::to_string(run.filters.size()) + " filters (run of seed " + std::to_string(run.seed) + ")");
+    }
+  }
   PaperFilterSummary s;
   s.name = runs.front().filters[f].name;
   std::vector<double> us;

@@ -2,16 +2,30 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/paper.hpp>
 #include "eval/parallel.hpp"
+#include "filters/information_ops.hpp"
 
 #include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
+#include <string>
 
 namespace seif {
 
 void checkPaperRequest(const PaperRequest& request) {
   if (request.runs < 1) throw InvalidArgument("paper: runs must be >= 1");
+  // Each SEIF's theta_x within the range its spec's `active` takes, K not negative: every
+  // run would fail otherwise.
+  const PaperOptions& o = request.options;
+  const auto checkActive = [](int active, const char* what) {
+    if (active < 1 || active > kMaxLocalLandmarks - 1) {
+      throw InvalidArgument(std::string("paper: ") + what + " must be in [1, " + std::to_string(kMaxLocalLandmarks - 1) +
+                            "], found " + std::to_string(active));
+    }
+  };
+  checkActive(o.active, "active");
+  for (int a : o.sweep_active) checkActive(a, "each of sweep_active");
+  if (o.relax < 0) throw InvalidArgument("paper: relax must be >= 0, found " + std::to_string(o.relax));
   // Run r uses seed SEED + r: the last one must not wrap past 2^64 - 1.
   if (request.seed > UINT64_MAX - static_cast<std::uint64_t>(request.runs - 1)) {
     throw InvalidArgument("--seed + --runs - 1 must be at most " + std::to_string(UINT64_MAX) + ", found " +

@@ -170,7 +170,13 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
       associator->associate(f, k, z);
     };
   }
-  runLoop(filter, source, steps, observers, options);
+  try {
+    runLoop(filter, source, steps, observers, options);
+  } catch (const Error&) {  // what ran before it is kept (RunOutput::failure)
+    out.failure = std::current_exception();
+    out.final_stats = filter.stats();
+    out.rejected_observations = filter.rejectedObservations();
+  }
   if (associator) associator->finish(filter);
   if (progress) progress(1.0);
   out.dropped = source.dropped();

@@ -5,6 +5,9 @@
 #include <seif/core/errors.hpp>
 #include <seif/filters/checkpoint.hpp>
 
+#include <cmath>
+#include <string>
+
 namespace seif {
 
 namespace {
@@ -17,10 +20,16 @@ void writeTrack(ArchiveWriter& w, const std::vector<TimedPose>& track) {
   }
 }
 
+/// Its stamps finite and in order, its poses finite: what a run writes, even where a
+/// checkpoint's checksum was forged.
 std::vector<TimedPose> readTrack(ArchiveReader& r, const char* what) {
   std::vector<TimedPose> track(r.count(what, 4 * 9));
-  for (TimedPose& p : track) {
+  for (std::size_t k = 0; k < track.size(); ++k) {
+    TimedPose& p = track[k];
     p.time = r.f64("time");
+    if (!std::isfinite(p.time) || (k > 0 && p.time < track[k - 1].time)) {
+      r.fail(std::string(what) + ": stamp " + std::to_string(k) + " is not finite or goes back in time");
+    }
     r.fixed("pose", p.pose, true);
   }
   return track;
@@ -65,10 +74,14 @@ RunOutput decodeRunOutput(std::string_view bytes, const std::string& name) {
   out.trajectory = readTrack(r, "trajectory poses");
   out.dead_reckoning = readTrack(r, "dead-reckoning poses");
   out.step_seconds.resize(r.count("step times", 9));
-  for (double& s : out.step_seconds) s = r.f64("step time");
+  for (double& s : out.step_seconds) {
+    s = r.f64("step time");
+    if (!(s >= 0.0 && std::isfinite(s))) r.fail("a step time is not a finite duration");
+  }
   out.pose_covariances.resize(r.count("pose covariances", 9 * 9));
   for (Mat3& P : out.pose_covariances) r.fixed("pose covariance", P, true);
   out.seconds = r.f64("seconds");
+  if (!(out.seconds >= 0.0 && std::isfinite(out.seconds))) r.fail("the run's time is not a finite duration");
   out.max_robot_links = static_cast<std::size_t>(r.u64("most robot links"));
   out.max_blocks_touched = static_cast<std::size_t>(r.u64("most blocks touched"));
   r.finish();

@@ -59,6 +59,26 @@ nlohmann::json ceilingJson(const std::optional<AssociationCeiling>& c, const Ass
                          "assignment (joint); what a perfect map and pose would get"}};
 }
 
+/// The message of a run's failure (RunOutput::failure).
+std::string failureMessage(const std::exception_ptr& failure) {
+  try {
+    std::rethrow_exception(failure);
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "an unknown error";
+  }
+}
+
+/// Removes what an earlier run wrote into `out`, so that none of it outlives this run as if
+/// it were this run's (a failed run writes only what it ran; an option left out writes less).
+void removeEarlierOutputs(const std::filesystem::path& out) {
+  for (const char* name : {"trajectory.tum", "dead_reckoning.tum", "map.csv", "metrics.json", "gps.csv",
+                           "trajectory_filter.tum", "map_filter.csv", "trajectory_cov.csv", "map.png"}) {
+    std::filesystem::remove(out / name);
+  }
+}
+
 std::string metricsJson(const RunRequest& request, const RunReport& r) {
   const RunOutput& out = r.output;
   std::vector<double> sorted = out.step_seconds;
@@ -83,6 +103,7 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
       {"start_pose_source", r.info.start_pose_source},
       {"steps", out.steps},
       {"interrupted", out.interrupted},
+      {"failure", out.failure ? nlohmann::json(failureMessage(out.failure)) : nlohmann::json(nullptr)},
       {"landmarks", r.landmarks},
       {"seconds", out.seconds},
       {"seconds_wall", r.seconds_wall},
@@ -321,6 +342,13 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
       throw DataError(name, 0, "the checkpoint's run read its dataset with " + o->second + ", this run with " +
                                    checkpointing.values["dataset-options"] + " (give the same options)");
     }
+    // The filter is the checkpoint's: a spec given that differs, or smoothing (which keeps
+    // every measurement and so has no checkpoint), would be silently ignored.
+    if (request.filter != RunRequest{}.filter && request.filter != extras.values["filter"]) {
+      throw InvalidArgument("resume: the checkpoint's run is of " + extras.values["filter"] + "; this run asks for " +
+                            request.filter + " (give it, or no filter: a resumed run continues the checkpoint's filter)");
+    }
+    if (request.smooth) throw InvalidArgument("resume: a run resumed from a checkpoint cannot be smoothed (--smooth)");
     checkpointing.values["filter"] = extras.values["filter"];
     resume = runResumeFrom(extras.values, static_cast<std::size_t>(extras.steps_consumed), name);
   } else {
@@ -345,18 +373,22 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   }
   report.association_options = associator.options();
   const bool associating = associator.options().method != AssociationMethod::Known;
+  removeEarlierOutputs(out);
   report.output = runFilter(*filter, *source, progress, request.trajectory_covariances, checkpointing,
                             resume ? &*resume : nullptr, &associator, request.stop);
   if (associating || associator.options().drop_unlabelled) report.association = associator.counts();
   report.filter = checkpointing.values["filter"];
   report.info = source->info();
   source.reset();
+  const std::exception_ptr failure = report.output.failure;
+  if (failure && report.output.steps == 0) std::rethrow_exception(failure);  // nothing to write
   if (report.output.steps == 0 && report.output.interrupted && !resume) {
     throw Interrupted("run interrupted before its first step: nothing written to " + out.string());
   }
-  if (report.output.steps == 0 && !report.output.interrupted) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
+  if (report.output.steps == 0 && !report.output.interrupted && !failure) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
   report.seconds_wall = secondsSince(start);
-  if (associating && report.info.has_groundtruth && !report.info.landmarks.empty()) {  // an evaluation: not timed
+  // An evaluation, not timed; it rereads the whole dataset, which a failed run did not get through.
+  if (associating && !failure && report.info.has_groundtruth && !report.info.landmarks.empty()) {
     const auto reread = openDataset(request.dataset, request.format, request.dataset_options);
     report.association_ceiling = associationCeiling(*reread, *report.info.sensor);
   }

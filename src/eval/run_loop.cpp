@@ -4,6 +4,7 @@
 #include <seif/eval/run_loop.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <sstream>
 
 namespace seif {
@@ -41,7 +42,9 @@ void runStep(SlamFilter& filter, const Step& step, std::size_t k, const std::vec
     }
   } catch (const Error& e) {  // seif's own: named with the step; anything else passes as it is
     std::ostringstream msg;
-    msg << filter.name() << ": step " << k << " (t = " << std::fixed << step.time << "): " << e.what();
+    msg << filter.name() << ": step " << k << " (t = ";
+    if (std::abs(step.time) < 1e12) msg << std::fixed;  // else in exponent form, not 300 digits
+    msg << step.time << "): " << e.what();
     throw NumericError(msg.str());
   }
   for (RunObserver* o : observers) o->afterUpdate(filter, step, k, seconds);
@@ -74,6 +77,14 @@ std::size_t runLoop(SlamFilter& filter, const Dataset& data, const std::vector<R
     if (stopRequested(options)) {
       stopRun(filter, observers, k);
       break;
+    }
+    // A Dataset built in memory has not been through a reader's checks of its stamps.
+    const double before = k == 0 ? data.start_time : data.steps[k - 1].time;
+    if (!std::isfinite(data.steps[k].time) || data.steps[k].time < before) {
+      std::ostringstream msg;
+      msg << "dataset: step " << k << "'s time " << data.steps[k].time << " is not finite or goes back in time (from "
+          << before << ")";
+      throw InvalidArgument(msg.str());
     }
     runStep(filter, data.steps[k], k, observers, options);
   }

@@ -9,6 +9,7 @@
 #include "filters/option_values.hpp"
 
 #include <algorithm>
+#include <vector>
 #include <array>
 #include <limits>
 #include <string>
@@ -231,15 +232,19 @@ FilterSpec parseFilterSpec(std::string_view text, const FilterSpec& defaults) {
   const std::size_t colon = text.find(':');
   spec.name = std::string(text.substr(0, colon));
   if (!knownFilter(spec.name)) {
+    if (spec.name.find(',') != std::string::npos) badSpec(text, "a list where one filter spec is expected");
     badSpec(text, "unknown filter '" + spec.name + "' (expected ekf, eif, seif or batch)");
   }
   if (colon == std::string_view::npos) return spec;
   std::string_view rest = text.substr(colon + 1);
   if (rest.empty()) badSpec(text, "nothing after ':' (expected key=value,...)");
-  while (!rest.empty()) {
+  std::vector<std::string_view> given;
+  for (bool more = true; more;) {
     const std::size_t comma = rest.find(',');
     const std::string_view item = rest.substr(0, comma);
-    rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
+    more = comma != std::string_view::npos;
+    rest = more ? rest.substr(comma + 1) : std::string_view();
+    if (item.empty()) badSpec(text, "an empty option (a ',' too many)");
     const std::size_t eq = item.find('=');
     if (eq == std::string_view::npos || eq == 0 || eq + 1 == item.size()) {
       std::string what = "'";  // built by appends: GCC 12's -Wrestrict misfires on "lit" + string&&
@@ -247,6 +252,10 @@ FilterSpec parseFilterSpec(std::string_view text, const FilterSpec& defaults) {
     }
     const std::string_view key = item.substr(0, eq);
     const std::string_view value = item.substr(eq + 1);
+    if (std::find(given.begin(), given.end(), key) != given.end()) {
+      badSpec(text, "option '" + std::string(key) + "' given twice");
+    }
+    given.push_back(key);
     const auto option = std::find_if(kOptions.begin(), kOptions.end(), [&](const FilterOption& o) { return o.key == key; });
     if (option == kOptions.end() || !takesOption(spec.name, *option)) {
       if (spec.name == "batch" && key == "linearization") {
@@ -270,10 +279,14 @@ FilterSpec parseFilterSpec(std::string_view text, const FilterSpec& defaults) {
 
 std::vector<std::string> splitFilterList(std::string_view list) {
   std::vector<std::string> specs;
+  const std::string whole(list);
   while (true) {
     const std::size_t comma = list.find(',');
     const std::string_view item = list.substr(0, comma);
-    if (item.empty()) throw InvalidArgument("filter list '" + std::string(list) + "': an empty item");
+    if (item.empty()) {
+      throw InvalidArgument(whole.empty() ? std::string("filter list: empty (expected SPEC[,SPEC...])")
+                                          : "filter list '" + whole + "': an empty item (a ',' too many)");
+    }
     const bool option = item.find('=') != std::string_view::npos && item.find(':') == std::string_view::npos;
     if (option) {
       if (specs.empty()) throw InvalidArgument("filter list: option '" + std::string(item) + "' before any filter");
@@ -288,6 +301,7 @@ std::vector<std::string> splitFilterList(std::string_view list) {
 }
 
 std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& start, const FilterConfig& config) {
+  if (!start.allFinite()) throw InvalidArgument("the start pose is not finite");
   FilterConfig c = config;
   c.linearization = spec.linearization;
   c.iterations = spec.iterations;

@@ -3,6 +3,7 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 namespace seif {
@@ -39,6 +40,9 @@ void LandmarkBook::check(std::span<const Observation> z, const MeasurementModel&
     if (!z[k].z.allFinite()) badObservation(filter_, k, z[k], "the measurement is not finite");
     const Mat2 R = sensor.noise(z[k]);
     if (!R.allFinite()) badObservation(filter_, k, z[k], "the measurement noise is not finite");
+    if (std::abs(R(0, 1) - R(1, 0)) > 1e-9 * (std::abs(R(0, 0)) + std::abs(R(1, 1)))) {  // beyond rounding
+      badObservation(filter_, k, z[k], "the measurement noise is not symmetric");
+    }
     if (!(R(0, 0) > 0.0 && R(0, 0) * R(1, 1) - R(0, 1) * R(1, 0) > 0.0)) {
       badObservation(filter_, k, z[k], "the measurement noise is not positive definite");
     }

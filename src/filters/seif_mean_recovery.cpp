@@ -1,10 +1,12 @@
 // The SEIF's mean recovery (algorithm.md §2): amortised block Gauss-Seidel, paper eq. (42),
 // or the exact sparse solve of H mu = b. SeifOptions::mean chooses; SeifSlam::update calls.
 #include "core/sparse_marginals.hpp"
+#include <seif/core/errors.hpp>
 #include "filters/seif_slam.hpp"
 
 #include <algorithm>
 #include <array>
+#include <string>
 
 namespace seif {
 
@@ -66,6 +68,7 @@ void SeifSlam::recoverMean(bool with_active, ActiveBlock block) {
 }
 
 void SeifSlam::relaxMean(int sweeps) {
+  if (sweeps < 0) throw InvalidArgument("seif: relaxMean: sweeps must be >= 0, found " + std::to_string(sweeps));
   settleMotion();
   block_ = ActiveBlock::Stale;
   for (int s = 0; s < sweeps; ++s) {

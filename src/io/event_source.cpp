@@ -65,9 +65,11 @@ double resolveNoise(DatasetInfo& info, const DatasetOptions& options, const std:
     s.value = *from_file;
     s.source = file_source;
   }
-  if (!std::isfinite(s.value) || !(s.value > 0.0)) {
+  // Bounded so that the variance and the information it gives are finite and not zero.
+  if (!std::isfinite(s.value) || !(s.value > 0.0) || s.value < 1e-100 || s.value > 1e100) {
     std::ostringstream msg;
-    msg << name << " must be finite and > 0, found " << s.value << " (" << s.source << ")";
+    msg << name << (std::isfinite(s.value) && s.value > 0.0 ? " must be in [1e-100, 1e100]" : " must be finite and > 0")
+        << ", found " << s.value << " (" << s.source << ")";
     throw InvalidArgument(msg.str());
   }
   info.noise.push_back(s);

@@ -45,17 +45,18 @@ Eigen::Matrix<double, N, N> invert(const Eigen::Matrix<double, N, N>& m) {
 }
 
 /// The covariance a record gives: its matrix (iSAM), or the inverse of its information
-/// matrix (g2o). Either must be symmetric positive definite, and the covariance finite.
+/// matrix (g2o). Either must be symmetric positive definite, and its inverse finite (the
+/// filters and the other format need it: 1e-310 is positive, 1 / 1e-310 is not finite).
 template <int N>
 Eigen::Matrix<double, N, N> recordCovariance(const TextTable& t, std::size_t first, bool information) {
   const Eigen::Matrix<double, N, N> m = upperTriangle<N>(t, first);
   const char* what = information ? "the information matrix" : "the covariance";
   if (Eigen::LLT<Eigen::Matrix<double, N, N>>(m).info() != Eigen::Success) t.fail(std::string(what) + " is not positive definite");
-  const Eigen::Matrix<double, N, N> c = information ? invert<N>(m) : m;
-  if (!c.allFinite() || Eigen::LLT<Eigen::Matrix<double, N, N>>(c).info() != Eigen::Success) {
-    t.fail(std::string(what) + " is too close to singular for a finite covariance");
+  const Eigen::Matrix<double, N, N> inverse = invert<N>(m);
+  if (!inverse.allFinite() || Eigen::LLT<Eigen::Matrix<double, N, N>>(inverse).info() != Eigen::Success) {
+    t.fail(std::string(what) + " is too close to singular for a finite " + (information ? "covariance" : "information matrix"));
   }
-  return c;
+  return information ? inverse : m;
 }
 
 /// The first data line's tag of a file, or empty.
@@ -115,7 +116,9 @@ class GraphSource final : public EventSource {
     while (t.next()) {
       const std::string_view tag = t.field(0);
       if (tag == "VERTEX_SE2" && t.size() == 5 && before_edges) {
-        vertices[t.index(1)] = Pose2(t.real(2), t.real(3), t.real(4));
+        if (!vertices.emplace(t.index(1), Pose2(t.real(2), t.real(3), t.real(4))).second) {
+          t.fail("vertex " + std::to_string(t.index(1)) + " listed twice");
+        }
       } else if ((tag == "ODOMETRY" || tag == "EDGE_SE2") && t.size() >= 3 && before_edges) {
         before_edges = false;
         const long long first = t.index(1);
@@ -176,7 +179,7 @@ class GraphSource final : public EventSource {
     claim(to, Kind::Pose, 2);
     if (!reached_.insert(to).second) table_.fail("pose " + std::to_string(to) + " is reached twice: the chain must reach a new pose");
     OdometryIncrement u;
-    u.delta = Vec3(table_.real(3), table_.real(4), table_.real(5));
+    u.delta = Vec3(table_.real(3), table_.real(4), table_.angle(5));
     u.covariance = recordCovariance<3>(table_, 6, !isam);
     flush();
     ++k_;
@@ -189,7 +192,7 @@ class GraphSource final : public EventSource {
     Observation z;
     if (kind == Sensor::RangeBearing) {
       table_.expect({"BR", "pose", "landmark", "bearing", "range", "sigma_bearing", "sigma_range"});
-      const double bearing = table_.real(3), range = table_.real(4), sb = table_.real(5), sr = table_.real(6);
+      const double bearing = table_.angle(3), range = table_.real(4), sb = table_.real(5), sr = table_.real(6);
       if (!(range > 0.0)) table_.fail("range " + formatDouble(range) + " must be positive");
       if (!(sb > 0.0) || !(sr > 0.0)) table_.fail("standard deviations must be positive");
       z.z = Vec2(range, bearing);
@@ -225,6 +228,11 @@ class GraphSource final : public EventSource {
   }
 
   void vertex(bool pose) {
+    // A vertex's estimate is read once (the chain's first pose starts the run): a second one
+    // for the same id would be ignored, or replace the first.
+    if (const auto [it, fresh] = vertex_line_.emplace(table_.index(1), table_.line()); !fresh) {
+      table_.fail("vertex " + std::to_string(it->first) + " listed twice (first on line " + std::to_string(it->second) + ")");
+    }
     if (pose) {
       table_.expect({"VERTEX_SE2", "id", "x", "y", "theta"});
       claim(table_.index(1), Kind::Pose, 1);
@@ -259,6 +267,7 @@ class GraphSource final : public EventSource {
   DatasetInfo info_;
   Sensor sensor_ = Sensor::None;
   std::unordered_map<long long, Kind> kinds_;
+  std::unordered_map<long long, long> vertex_line_;  // where each vertex was listed
   std::unordered_set<long long> reached_;  // poses the chain has been at
   long long current_ = -1;  // the pose the chain is at
   long k_ = 0;              // odometry records so far: the time of the current pose

@@ -127,6 +127,7 @@ Barcodes parseBarcodes(TextTable& t) {
     }
     barcodes.emplace(barcode, subject);
   }
+  if (barcodes.empty()) t.fail("no barcode listed (expected rows of: subject barcode)");
   return barcodes;
 }
 
@@ -164,7 +165,7 @@ std::optional<MeasurementRecord> measurementRow(TextTable& t, TimeOrder& order, 
   m.time = t.real(0);
   const int barcode = t.integer(1);
   m.range = t.real(2);
-  m.bearing = t.real(3);
+  m.bearing = t.angle(3);
   order.check(t, m.time);
   if (!(m.range > 0.0)) t.fail("range " + formatDouble(m.range) + " must be positive");
   const auto it = barcodes.find(barcode);

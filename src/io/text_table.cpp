@@ -42,12 +42,18 @@ std::size_t TextTable::offset() const {
   return file_ ? consumed_ : std::min(pos_, text_.size());
 }
 
+namespace {
+/// UTF-8's byte order mark, which some editors put at a text file's start: not data.
+constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
+}  // namespace
+
 bool TextTable::next() {
   named_ = 0;
   if (file_) {
     while (std::getline(*file_, buffer_)) {
       ++line_;
       consumed_ += buffer_.size() + 1;
+      if (line_ == 1 && buffer_.starts_with(kByteOrderMark)) buffer_.erase(0, kByteOrderMark.size());
       if (split(buffer_)) return true;
     }
     if (file_->bad()) throw DataError(name_, line_, "read error");
@@ -56,9 +62,10 @@ bool TextTable::next() {
   while (pos_ < text_.size()) {
     std::size_t eol = text_.find('\n', pos_);
     if (eol == std::string_view::npos) eol = text_.size();
-    const std::string_view line(text_.data() + pos_, eol - pos_);
+    std::string_view line(text_.data() + pos_, eol - pos_);
     pos_ = eol + 1;
     ++line_;
+    if (line_ == 1 && line.starts_with(kByteOrderMark)) line.remove_prefix(kByteOrderMark.size());
     if (split(line)) return true;
   }
   return false;
@@ -125,6 +132,15 @@ double TextTable::real(std::size_t col) const {
     fail("bad number " + quotedField(f) + " in " + columnName(col));
   }
   if (!std::isfinite(value)) fail("non-finite number " + quotedField(f) + " in " + columnName(col));
+  return value;
+}
+
+double TextTable::angle(std::size_t col) const {
+  const double value = real(col);
+  constexpr double kTurn = 6.283185307179586;
+  if (std::abs(value) > kTurn + halfUnit(col)) {
+    fail("angle " + quotedField(fields_[col]) + " rad in " + columnName(col) + " is more than a turn (2 pi)");
+  }
   return value;
 }
 

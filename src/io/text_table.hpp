@@ -57,6 +57,9 @@ class TextTable {
 
   /// Column `col` (0-based) as a finite double / an int / a non-negative long long.
   double real(std::size_t col) const;
+  /// real(), an angle in radians within one turn either way (|a| <= 2 pi, to the printed
+  /// precision): a bearing or a heading increment beyond that is not one.
+  double angle(std::size_t col) const;
   int integer(std::size_t col) const;
   long long index(std::size_t col) const;
   /// Half a unit of the last printed decimal of column `col` as written ("3.141593":

@@ -11,6 +11,12 @@
 namespace seif {
 
 Mat2 diagonalNoise(double sigma_1, double sigma_2) {
+  // A negative sigma would pass squared: refused here, as the motion models refuse theirs.
+  if (!(std::isfinite(sigma_1) && sigma_1 > 0.0 && std::isfinite(sigma_2) && sigma_2 > 0.0)) {
+    std::ostringstream msg;
+    msg << "noise standard deviations must be finite and > 0, found " << sigma_1 << " and " << sigma_2;
+    throw ModelError(msg.str());
+  }
   return Eigen::Vector2d(sigma_1 * sigma_1, sigma_2 * sigma_2).asDiagonal();
 }
 

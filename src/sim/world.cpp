@@ -161,7 +161,9 @@ void validate(const WorldConfig& c) {
   require(c.preset == WorldPreset::Paper || c.preset == WorldPreset::Uniform ||
               c.preset == WorldPreset::Corridor || c.preset == WorldPreset::Park,
           "unknown world preset");
-  require(c.landmarks >= 1, got("landmarks must be >= 1", c.landmarks));
+  // The bounds keep a mistyped count from filling the memory: 10^7 landmarks hold ~0.5 GB,
+  // 10^8 false detections ~4 GB of log.
+  require(c.landmarks >= 1 && c.landmarks <= 10'000'000, got("landmarks must be in [1, 10^7]", c.landmarks));
   require(c.steps >= 1, got("steps must be >= 1", c.steps));
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   auto sigma = [](double v) { return std::isfinite(v) && v >= 0.0; };
@@ -179,7 +181,10 @@ void validate(const WorldConfig& c) {
           got("noise.sigma_range must be finite and >= 0", c.noise.sigma_range));
   require(sigma(c.noise.sigma_bearing),
           got("noise.sigma_bearing must be finite and >= 0", c.noise.sigma_bearing));
-  require(std::isfinite(c.clutter) && c.clutter >= 0.0, got("clutter must be finite and >= 0", c.clutter));
+  require(std::isfinite(c.clutter) && c.clutter >= 0.0 && c.clutter <= 1e4,
+          got("clutter must be in [0, 10^4] false detections per scan", c.clutter));
+  require(c.clutter * static_cast<double>(c.steps) <= 1e8,
+          got("clutter x steps must be at most 10^8 false detections in all", c.clutter * static_cast<double>(c.steps)));
   require(c.detection_probability >= 0.0 && c.detection_probability <= 1.0,
           got("detection_probability must be in [0, 1]", c.detection_probability));
   if (c.preset == WorldPreset::Corridor) {

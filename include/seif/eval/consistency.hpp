@@ -106,6 +106,10 @@ struct ConsistencyResult {
   std::vector<ConsistencyFilterResult> filters;
 };
 
+/// Throws InvalidArgument for options runConsistency() cannot run: no runs or filters, a
+/// dataset without steps, ground truth or models, seeds that would wrap past 2^64 - 1.
+void checkConsistencyOptions(const ConsistencyOptions& options);
+
 /// Runs the study. `progress(done, total)` counts runs and is called from worker threads,
 /// one call at a time. A filter that stops with a NumericError in a run is listed in its
 /// result's failed_runs, and the study goes on. Other errors throw, naming the run and the

@@ -12,6 +12,7 @@
 
 #include <atomic>
 #include <cstddef>
+#include <exception>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -40,6 +41,11 @@ struct RunOutput {
   /// Stopped before its last step (RunLoopOptions::stop, Ctrl-C in `seif run`): everything
   /// here covers the `steps` run.
   bool interrupted = false;
+  /// The error that ended a streamed run before its end (a step's numerical failure, a bad
+  /// line further in the stream); null when it ran to the end or was stopped. Everything
+  /// here then covers the `steps` run before it; the filter holds the state after them
+  /// (and, when the update failed, that step's motion).
+  std::exception_ptr failure;
   // Streamed runs only (runFilter over an EventSource): what the stream carried besides
   // controls and observations, and the controls integrated alone. All O(steps).
   std::vector<TimedPose> dead_reckoning;  ///< the start pose, then after every step
@@ -79,7 +85,9 @@ RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::s
 
 /// Streams `source` through `filter`, whose config must hold the source's models (the
 /// filter is built from info()). `progress(fraction)` is called now and then.
-/// A failure inside a step is rethrown as NumericError naming the step and its time.
+/// A failure inside a step (a NumericError naming the step and its time) or of the stream
+/// (a DataError naming the file and line) ends the run there: it is returned in
+/// RunOutput::failure, with everything else covering the steps before it.
 /// With `resume`, the first resume->steps steps of the source are skipped (the filter is
 /// the checkpoint's) and the outputs continue resume->output: a resumed run ends with the
 /// same outputs, bit for bit, as the run that was never interrupted (timings aside).

@@ -4,7 +4,8 @@
 //   trajectory.tum  the filter's poses (TUM: t x y z qx qy qz qw)
 //   dead_reckoning.tum  the controls integrated alone from the same start, at the same stamps
 //   map.csv         id, x, y and the landmark's 2x2 marginal covariance
-//   metrics.json    timing, structure, errors (its keys: RunReport below; "interrupted" when stopped)
+//   metrics.json    timing, structure, errors (its keys: RunReport below; "interrupted" when
+//                   stopped, "failure" the error that ended a run early)
 //   gps.csv         time, x, y of the dataset's GPS fixes, when it has any
 //   trajectory_filter.tum, map_filter.csv  with `smooth`: the filter's, before the batch
 // Errors: ATE and map error against ground truth when the dataset has it (after the best
@@ -100,10 +101,13 @@ struct RunReport {
   double seconds_outputs = 0.0;  ///< trajectory, map with covariances, metrics
 };
 
-/// Runs `request` and writes the three files into `out` (which must exist and be writable).
-/// `progress(fraction)` is called during the run. Throws DataError for bad input,
-/// NumericError for a numerical failure, InvalidArgument for a bad request, Interrupted for
-/// a run stopped before its first step.
+/// Runs `request` and writes the three files into `out` (which must exist and be writable),
+/// first removing what an earlier run wrote there. `progress(fraction)` is called during the
+/// run. Throws DataError for bad input, NumericError for a numerical failure,
+/// InvalidArgument for a bad request, Interrupted for a run stopped before its first step.
+/// A failure after the first step does not throw: the outputs of the steps before it are
+/// written (metrics.json "failure" holds its message) and it is returned in
+/// RunReport::output.failure for the caller to report or rethrow.
 RunReport runDataset(const RunRequest& request, const std::filesystem::path& out,
                      const std::function<void(double)>& progress = {});
 

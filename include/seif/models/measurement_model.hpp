@@ -51,7 +51,8 @@ class MeasurementModel {
   bool mounted_;  // mount != 0 (at the origin the Jacobians pass through unchanged)
 };
 
-/// Noise with independent components: diag(sigma_1^2, sigma_2^2).
+/// Noise with independent components: diag(sigma_1^2, sigma_2^2). Throws ModelError unless
+/// both are finite and > 0.
 Mat2 diagonalNoise(double sigma_1, double sigma_2);
 
 }  // namespace seif

@@ -1,0 +1,93 @@
+"""scripts/figures/run_map.py (`seif plot`) checks its inputs: a corrupt file of a run folder
+stops it with one line `run_map.py: FILE:LINE: what is wrong (found 'TEXT')` and status 2."""
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from conftest import run_cli
+
+
+@pytest.fixture(scope="module")
+def good_run(tmp_path_factory, source_dir):
+    """A small `seif run` folder (SEIF_CLI, else this tree's build/bin/seif) with a gps.csv."""
+    pytest.importorskip("matplotlib", reason="run_map.py needs matplotlib")
+    cli = pathlib.Path(os.environ.get("SEIF_CLI") or source_dir / "build" / "bin" / "seif")
+    if not cli.is_file():
+        pytest.skip(f"no seif executable at {cli} (set SEIF_CLI)")
+    root = tmp_path_factory.mktemp("plot")
+    run_cli(cli, "simulate", "--preset", "paper", "--seed", 1, "--steps", 100, "--out", root / "sim")
+    run_cli(cli, "run", "--dataset", root / "sim", "--out", root / "run")
+    # GPS fixes: every 10th pose of the trajectory, as `seif run` writes gps.csv
+    poses = [line.split() for line in (root / "run" / "trajectory.tum").read_text().splitlines()[1:]]
+    (root / "run" / "gps.csv").write_text("time,x,y\n" + "".join(f"{p[0]},{p[1]},{p[2]}\n" for p in poses[::10]))
+    return root / "run"
+
+
+def plot(source_dir, run_dir):
+    """run_map.py called as `seif plot RUN_DIR` calls it."""
+    script = source_dir / "scripts" / "figures" / "run_map.py"
+    args = [run_dir / "map.png", "--ellipses", "--gps", run_dir / "gps.csv", run_dir]
+    return subprocess.run([sys.executable, str(script), *map(str, args)], capture_output=True, text=True)
+
+
+def edit(name, line, change):
+    """Replaces line `line` (from 1) of file `name` by change(line)."""
+    def apply(run_dir):
+        lines = (run_dir / name).read_text().split("\n")
+        lines[line - 1] = change(lines[line - 1])
+        (run_dir / name).write_text("\n".join(lines))
+    return apply
+
+
+def field(i, value, sep=" "):
+    return lambda text: sep.join(value if k == i else f for k, f in enumerate(text.split(sep)))
+
+
+def replace(name, text):
+    return lambda run_dir: (run_dir / name).write_text(text)
+
+
+# case: (corruption, file and line the message must name, the text it must quote)
+CASES = {
+    "trajectory not a number": (edit("trajectory.tum", 5, field(1, "abc")), "trajectory.tum", 5, "abc"),
+    "trajectory nan": (edit("trajectory.tum", 5, field(2, "nan")), "trajectory.tum", 5, "nan"),
+    "trajectory row of 2 fields": (edit("trajectory.tum", 5, lambda t: " ".join(t.split()[:2])), "trajectory.tum", 5, None),
+    "trajectory row of 7 fields": (edit("trajectory.tum", 5, lambda t: " ".join(t.split()[:7])), "trajectory.tum", 5, None),
+    "trajectory empty": (replace("trajectory.tum", ""), "trajectory.tum", 1, ""),
+    "dead reckoning not a number": (edit("dead_reckoning.tum", 6, field(3, "abc")), "dead_reckoning.tum", 6, "abc"),
+    "map coordinate nan": (edit("map.csv", 4, field(1, "nan", ",")), "map.csv", 4, "nan"),
+    "map covariance nan": (edit("map.csv", 4, field(4, "nan", ",")), "map.csv", 4, "nan"),
+    "map negative variance": (edit("map.csv", 4, field(5, "-5", ",")), "map.csv", 4, None),
+    "map |cov_xy| too large": (edit("map.csv", 4, lambda t: ",".join(t.split(",")[:3] + ["1", "2", "1"])), "map.csv", 4, None),
+    "map row of 5 fields": (edit("map.csv", 4, lambda t: ",".join(t.split(",")[:5])), "map.csv", 4, None),
+    "map wrong header": (edit("map.csv", 1, lambda t: "foo,bar"), "map.csv", 1, "foo,bar"),
+    "map empty": (replace("map.csv", ""), "map.csv", 1, ""),
+    "gps nan": (edit("gps.csv", 3, field(2, "nan", ",")), "gps.csv", 3, "nan"),
+    "gps not a number": (edit("gps.csv", 3, field(1, "abc", ",")), "gps.csv", 3, "abc"),
+    "gps no fix": (replace("gps.csv", "time,x,y\n"), "gps.csv", 1, ""),
+}
+
+
+def test_good_folder_is_drawn(good_run, source_dir, tmp_path):
+    run_dir = pathlib.Path(shutil.copytree(good_run, tmp_path / "run"))
+    done = plot(source_dir, run_dir)
+    assert done.returncode == 0, done.stderr
+    assert (run_dir / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_corrupt_input_is_one_line_and_exit_2(good_run, source_dir, tmp_path, case):
+    corrupt, name, line, found = CASES[case]
+    run_dir = pathlib.Path(shutil.copytree(good_run, tmp_path / "run"))
+    corrupt(run_dir)
+    done = plot(source_dir, run_dir)
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert len(done.stderr.splitlines()) == 1 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.startswith(f"run_map.py: {run_dir / name}:{line}: "), done.stderr
+    if found is not None:
+        assert done.stderr.rstrip().endswith(f"(found '{found}')"), done.stderr
+    assert not (run_dir / "map.png").exists()

@@ -1,0 +1,188 @@
+// A run that fails part-way (a step's numerical failure, bad data further in the stream)
+// keeps what it ran: the outputs of the steps before the failure are written, metrics.json
+// names the failure, and the error is still reported (seif run: exit 2, one line). What an
+// earlier run wrote into the folder never outlives a later one.
+#include "cli_support.hpp"
+
+#include <seif/association/association.hpp>
+#include <seif/core/errors.hpp>
+#include <seif/eval/run_dataset.hpp>
+#include <seif/filters/factory.hpp>
+#include <seif/io/mrclam.hpp>
+#include <seif/sim/world.hpp>
+#include "eval/run_checkpoint.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+using seif::test::runCli;
+using seif::test::scratchDir;
+using seif::test::slurp;
+
+namespace {
+
+/// The paper's world over `steps` steps as an MRCLAM folder; with `bad_line` > 0, that data
+/// line of the odometry (1-based, after the comment lines) drives at 1e300 m/s.
+fs::path writeWorld(const fs::path& dir, int steps, int bad_line = 0) {
+  const fs::path data = dir / "data";
+  seif::writeMrclam(data, seif::simulate(seif::presetConfig(seif::WorldPreset::Paper, 50, steps, 3)));
+  if (bad_line > 0) {
+    std::istringstream in(slurp(data / "Robot1_Odometry.dat"));
+    std::string line, text;
+    int row = 0;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] != '#' && ++row == bad_line) {
+        const auto tab = line.find('\t');
+        line = line.substr(0, tab) + "\t1e300" + line.substr(line.find('\t', tab + 1));
+      }
+      text += line + "\n";
+    }
+    std::ofstream(data / "Robot1_Odometry.dat") << text;
+  }
+  return data;
+}
+
+}  // namespace
+
+TEST(RunFailure, AStepThatFailsEndsTheRunWithTheOutputsOfTheStepsBeforeIt) {
+  const auto dir = scratchDir("run-failure");
+  const fs::path good = writeWorld(dir / "good", 200);
+  const fs::path bad = writeWorld(dir / "bad", 200, 120);
+  for (const char* filter : {"seif", "ekf"}) {
+    SCOPED_TRACE(filter);
+    seif::RunRequest request;
+    request.filter = filter;
+    request.dataset = good;
+    const fs::path whole = dir / (std::string(filter) + "-whole");
+    fs::create_directories(whole);
+    const seif::RunReport full = seif::runDataset(request, whole);
+    EXPECT_FALSE(full.output.failure);
+
+    request.dataset = bad;
+    const fs::path part = dir / (std::string(filter) + "-part");
+    fs::create_directories(part);
+    const seif::RunReport failed = seif::runDataset(request, part);
+    ASSERT_TRUE(failed.output.failure);
+    EXPECT_THROW(std::rethrow_exception(failed.output.failure), seif::NumericError);
+    EXPECT_GT(failed.output.steps, 50u);
+    EXPECT_LT(failed.output.steps, full.output.steps);
+    const nlohmann::json metrics = nlohmann::json::parse(slurp(part / "metrics.json"));
+    EXPECT_EQ(metrics.at("steps").get<std::size_t>(), failed.output.steps);
+    EXPECT_NE(metrics.at("failure").get<std::string>().find("motion increment is not finite"), std::string::npos)
+        << metrics.at("failure");
+    EXPECT_TRUE(nlohmann::json::parse(slurp(whole / "metrics.json")).at("failure").is_null());
+    // The trajectory written is the whole run's first poses, up to the failed step.
+    const std::string a = slurp(part / "trajectory.tum"), b = slurp(whole / "trajectory.tum");
+    ASSERT_LT(a.size(), b.size());
+    EXPECT_EQ(a, b.substr(0, a.size()));
+    EXPECT_TRUE(fs::exists(part / "map.csv"));
+  }
+  // The command line reports the run, then the failure: one line on stderr, exit status 2.
+  const auto r = runCli("run --dataset " + bad.string() + " --filter ekf --out " + (dir / "cli").string());
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("motion increment is not finite"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.out.find("the run failed at step"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(dir / "cli" / "trajectory.tum"));
+  fs::remove_all(dir);
+}
+
+TEST(RunFailure, WhatAnEarlierRunWroteIsRemovedFirst) {
+  const auto dir = scratchDir("run-stale");
+  const fs::path data = writeWorld(dir, 50);
+  const fs::path out = dir / "out";
+  fs::create_directories(out);
+  for (const char* stale : {"map_filter.csv", "trajectory_filter.tum", "gps.csv", "trajectory_cov.csv", "map.png"}) {
+    std::ofstream(out / stale) << "from an earlier run\n";
+  }
+  std::ofstream(out / "notes.txt") << "the user's\n";
+  seif::RunRequest request;
+  request.dataset = data;
+  seif::runDataset(request, out);
+  for (const char* stale : {"map_filter.csv", "trajectory_filter.tum", "gps.csv", "trajectory_cov.csv", "map.png"}) {
+    EXPECT_FALSE(fs::exists(out / stale)) << stale;
+  }
+  EXPECT_TRUE(fs::exists(out / "notes.txt"));
+  EXPECT_TRUE(fs::exists(out / "metrics.json"));
+  fs::remove_all(dir);
+}
+
+TEST(RunFailure, AResumedRunRefusesAnotherFilterAndSmoothing) {
+  const auto dir = scratchDir("run-resume-conflicts");
+  const fs::path data = writeWorld(dir, 60);
+  seif::RunRequest request;
+  request.dataset = data;
+  request.filter = "seif:active=4";
+  request.checkpoint = dir / "run.ckpt";
+  request.checkpoint_every = 20;
+  fs::create_directories(dir / "a");
+  seif::runDataset(request, dir / "a");
+  seif::RunRequest resume;
+  resume.dataset = data;
+  resume.resume = request.checkpoint;
+  resume.filter = "ekf";
+  fs::create_directories(dir / "b");
+  EXPECT_THROW(seif::runDataset(resume, dir / "b"), seif::InvalidArgument);
+  resume.filter = "seif:active=4";  // the checkpoint's own: accepted
+  EXPECT_NO_THROW(seif::runDataset(resume, dir / "b"));
+  resume.smooth = true;
+  EXPECT_THROW(seif::runDataset(resume, dir / "b"), seif::InvalidArgument);
+  fs::remove_all(dir);
+}
+
+TEST(RunFailure, AnAssociationWindowThatCanNeverConfirmIsRefused) {
+  seif::AssociationOptions o;
+  o.method = seif::AssociationMethod::NearestNeighbour;
+  o.confirm = 4;
+  o.window = 2;
+  EXPECT_THROW(seif::Associator{o}, seif::InvalidArgument);
+  o.window = 3;
+  EXPECT_NO_THROW(seif::Associator{o});
+  o.confirm = 1;
+  o.window = 0;
+  EXPECT_NO_THROW(seif::Associator{o});
+}
+
+TEST(RunFailure, FilterSpecsRefuseRepeatedKeysEmptyItemsAndLists) {
+  EXPECT_THROW(seif::parseFilterSpec("seif:active=4,active=5"), seif::InvalidArgument);
+  EXPECT_THROW(seif::parseFilterSpec("seif:active=4,"), seif::InvalidArgument);
+  EXPECT_THROW(seif::parseFilterSpec("seif:active=4,,relax=3"), seif::InvalidArgument);
+  try {
+    seif::parseFilterSpec("ekf,seif");
+    ADD_FAILURE() << "a list was taken for one spec";
+  } catch (const seif::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("a list where one filter spec is expected"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(seif::parseFilterSpec("seif:profile=consistent,active=20").seif.active, 20);
+  EXPECT_THROW(seif::splitFilterList("ekf,,seif"), seif::InvalidArgument);
+  EXPECT_THROW(seif::splitFilterList(""), seif::InvalidArgument);
+}
+
+// A checkpoint's run outputs are checked as a run writes them, even where its checksum was
+// forged: finite stamps in time order, finite step times.
+TEST(RunFailure, ACheckpointsRunOutputsHoldFiniteOrderedStamps) {
+  seif::RunOutput out;
+  out.steps = 2;
+  out.trajectory = {{0.0, seif::Pose2::Zero()}, {1.0, seif::Pose2::Zero()}, {2.0, seif::Pose2::Zero()}};
+  out.dead_reckoning = out.trajectory;
+  out.step_seconds = {1e-3, 1e-3};
+  out.seconds = 2e-3;
+  EXPECT_NO_THROW(seif::decodeRunOutput(seif::encodeRunOutput(out), "c"));
+  seif::RunOutput bad = out;
+  bad.trajectory[1].time = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(seif::decodeRunOutput(seif::encodeRunOutput(bad), "c"), seif::DataError);
+  bad = out;
+  bad.dead_reckoning[2].time = 0.5;  // back in time
+  EXPECT_THROW(seif::decodeRunOutput(seif::encodeRunOutput(bad), "c"), seif::DataError);
+  bad = out;
+  bad.step_seconds[0] = -1.0;
+  EXPECT_THROW(seif::decodeRunOutput(seif::encodeRunOutput(bad), "c"), seif::DataError);
+}
