@@ -206,6 +206,9 @@ void bindRun(py::module_& m) {
       "outputs so far are written (metrics.json \"interrupted\": true; with request.checkpoint a checkpoint "
       "to resume from), then KeyboardInterrupt is raised.");
 
+  m.def("run_summary", &runSummary, py::arg("request"), py::arg("report"), py::arg("out_dir"),
+        "The report `seif run` prints after run_dataset: the filter, models and noise with their sources, "
+        "the errors against each reference, timing, smoothing and association figures, and what was written.");
   m.def(
       "run_filter",
       [](SlamFilter& filter, const Dataset& data, const py::object& progress) {

@@ -61,6 +61,23 @@ def test_simulated_folder_python_equals_cli(cli, simulated_folder, tmp_path, spe
     np.testing.assert_array_equal(tum[:, 1:3], as_written(report.output.trajectory_array()[:, 1:3]))
 
 
+def test_run_summary_is_what_seif_run_prints(cli, simulated_folder, tmp_path):
+    """seif.run_summary gives the report `seif run` prints, its timings aside."""
+    import re
+    out = tmp_path / "out"
+    out.mkdir()
+    printed = run_cli(cli, "run", "--dataset", simulated_folder, "--filter", "ekf", "--out", out).stdout
+    request = seif.RunRequest(str(simulated_folder), "ekf")
+    text = seif.run_summary(request, seif.run_dataset(request, str(tmp_path)), str(out))
+
+    def untimed(report):
+        lines = [line for line in report.splitlines() if not line.startswith("  time:")]
+        return [re.sub(r"[0-9.]+ us/step", "us/step", line) for line in lines]
+
+    assert "landmark RMSE" in text and f"wrote {out}/" in text
+    assert untimed(text) == untimed(printed)
+
+
 def test_stream_through_python_equals_cli_trajectory(cli, simulated_folder, tmp_path):
     """Events read in Python, steps assembled and filtered in Python = the CLI's trajectory."""
     run_cli(cli, "run", "--dataset", simulated_folder, "--filter", "seif", "--out", tmp_path)

@@ -111,6 +111,11 @@ struct RunReport {
 RunReport runDataset(const RunRequest& request, const std::filesystem::path& out,
                      const std::function<void(double)>& progress = {});
 
+/// The report `seif run` prints after a run: the filter, models and noise with their
+/// sources, the errors against each reference the dataset has, timing, smoothing and
+/// association figures, and what was written into `out_dir`.
+std::string runSummary(const RunRequest& request, const RunReport& report, const std::filesystem::path& out_dir);
+
 /// RMS distance between the trajectory, interpolated at each GPS stamp inside its span, and
 /// the fixes, after the best rigid 2-D alignment; nullopt without fixes in the span.
 /// `compared` receives the number of fixes used.
