@@ -29,50 +29,6 @@ struct BenchArgs {
   AssociationFlags association;
 };
 
-void printHeader() {
-  std::printf("%-6s %9s %9s %6s %12s %12s %10s %10s %10s\n", "filter", "N", "mapped", "steps",
-              "median us", "p90 us", "peak MB", "filter MB", "B/landmark");
-}
-
-void printRow(const BenchMeasurement& m) {
-  const double per = m.filter_peak_mb * 1024.0 * 1024.0 / static_cast<double>(std::max<std::size_t>(1, m.map_last));
-  std::printf("%-6s %9d %9zu %6zu %12.1f %12.1f %10.1f %10.1f %10.0f", m.filter.c_str(), m.landmarks,
-              m.map_last, m.steps, m.us_per_step_median, m.us_per_step_p90, m.peak_rss_mb,
-              m.filter_peak_mb, per);
-  if (m.association != "known") {
-    const double correct = m.association_scored == 0 ? 0.0 : 100.0 * double(m.association_correct) / double(m.association_scored);
-    std::printf("   %s: %.1f us/scan median, %.1f p90 over %zu scans; %.1f %% correct", m.association.c_str(),
-                m.us_association_per_scan_median, m.us_association_per_scan_p90, m.scans, correct);
-  }
-  std::printf("\n");
-  std::fflush(stdout);
-}
-
-void printSkipped(const std::string& filter, int n, const std::string& why) {
-  std::printf("%-6s %9d   skipped: %s\n", filter.c_str(), n, why.c_str());
-  std::fflush(stdout);
-}
-
-void printTargets(const BenchTargets& t) {
-  if (const auto& g = t.seif_growth) {
-    std::printf("SEIF median at N=%d / at N=%d: %.1f / %.1f us = %.2fx (target <= 1.5x): %s\n", g->to_landmarks,
-                g->from_landmarks, g->to_us, g->from_us, g->ratio, g->met ? "met" : "NOT met");
-  }
-  if (const auto& g = t.seif_association_growth) {
-    std::printf("SEIF association per scan at N=%d / at N=%d: %.1f / %.1f us = %.2fx (target <= 1.5x): %s\n",
-                g->to_landmarks, g->from_landmarks, g->to_us, g->from_us, g->ratio, g->met ? "met" : "NOT met");
-  }
-  if (const auto& s = t.ekf_over_seif) {
-    std::printf("EKF / SEIF median at N=%d: %.1f / %.1f us = %.0fx (target >= 100x): %s\n", s->landmarks,
-                s->ekf_us, s->seif_us, s->ratio, s->met ? "met" : "NOT met");
-  }
-  if (!t.seif_bytes_per_landmark.empty()) {
-    std::printf("SEIF memory per landmark (filter peak / mapped):");
-    for (const auto& [n, bytes] : t.seif_bytes_per_landmark) std::printf(" %.0f B at N=%d;", bytes, n);
-    std::printf("\n");
-  }
-}
-
 void bench(const BenchArgs& args) {
   requireOutputFolder(args.out);
   BenchRequest request;
@@ -96,15 +52,12 @@ void bench(const BenchArgs& args) {
               "budget %g s and %g GB per case\n",
               static_cast<unsigned long long>(args.world_seed), args.window, args.repeat,
               args.max_seconds, args.max_memory_gb);
-  printHeader();
+  std::fputs(benchHeaderText().c_str(), stdout);
   const BenchReport report = runBench(request, [&](const BenchRow& row) {
-    if (row.measurement) {
-      printRow(*row.measurement);
-    } else {
-      printSkipped(row.filter, row.landmarks, row.skipped);
-    }
+    std::fputs(benchRowText(row).c_str(), stdout);
+    std::fflush(stdout);
   });
-  printTargets(report.targets);
+  std::fputs(benchTargetsText(report.targets).c_str(), stdout);
   const std::filesystem::path json = std::filesystem::path(args.out) / "bench.json";
   writeFileAtomically(json, benchJson(report));
   std::printf("wrote %s\n", json.string().c_str());

@@ -668,7 +668,8 @@ void bindBench(py::module_& m) {
       .def_readonly("rows", &BenchReport::rows, py::return_value_policy::copy)
       .def_readonly("calibration", &BenchReport::calibration, py::return_value_policy::copy)
       .def_readonly("targets", &BenchReport::targets, py::return_value_policy::copy)
-      .def("json", [](const BenchReport& r) { return benchJson(r); }, "bench.json of `seif bench`");
+      .def("json", [](const BenchReport& r) { return benchJson(r); }, "bench.json of `seif bench`")
+      .def("summary_text", &benchSummaryText, "the table `seif bench` prints (its rows and targets)");
   m.def(
       "run_bench",
       [](const BenchRequest& request, const py::object& row_done) {

@@ -228,6 +228,14 @@ def test_bench_study_python_equals_cli(cli, tmp_path):
     assert shape(py_report) == shape(cli_report)
     assert all(r.measurement is not None and r.measurement.us_per_step_median > 0 for r in report.rows)
     assert report.targets.seif_growth is not None
+    # The table `seif bench` prints, in the same layout (the times are measured anew).
+    text = report.summary_text()
+    assert text.splitlines()[0].split() == ["filter", "N", "mapped", "steps", "median", "us", "p90", "us", "peak",
+                                            "MB", "filter", "MB", "B/landmark"]
+    assert len(text.splitlines()) >= 1 + len(report.rows) and "SEIF median at N=200 / at N=100" in text
+    printed = run_cli(cli, "bench", "--filters", "ekf,seif", "--landmarks", "100,200", "--window", "20", "--repeat",
+                      "1", "--no-figure", "--out", tmp_path / "again").stdout
+    assert text.splitlines()[0] in printed.splitlines()
     if importlib.util.find_spec("matplotlib"):
         (tmp_path / "py.json").write_text(report.json())
         seif.render_figure("bench", tmp_path / "py.json", tmp_path / "py.png")

@@ -201,6 +201,13 @@ struct BenchReport {
   BenchTargets targets;
 };
 
+/// The table `seif bench` prints: its header, one line per case (measured or skipped), the
+/// targets' lines; benchSummaryText() all of them for a finished report.
+std::string benchHeaderText();
+std::string benchRowText(const BenchRow& row);
+std::string benchTargetsText(const BenchTargets& targets);
+std::string benchSummaryText(const BenchReport& report);
+
 /// Runs the study; `row_done(row)` follows every case, measured or skipped. Throws
 /// NumericError when a calibration case fails.
 BenchReport runBench(const BenchRequest& request, const std::function<void(const BenchRow&)>& row_done = {});
