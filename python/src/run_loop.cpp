@@ -53,7 +53,13 @@ class StopWhen : public RunObserver {
 
  private:
   void ask() {
-    if (stop_()) flag_.store(true, std::memory_order_relaxed);
+    bool stop = false;
+    try {
+      stop = stop_();
+    } catch (const py::cast_error&) {  // pybind11's message names no hook
+      throw InvalidArgument("run_loop: stop() must return True or False");
+    }
+    if (stop) flag_.store(true, std::memory_order_relaxed);
   }
   std::function<bool()> stop_;
   std::atomic<bool>& flag_;
@@ -79,7 +85,11 @@ std::size_t runWith(std::vector<RunObserver*> observers, std::size_t start_step,
   }
   if (associate) {
     options.associate = [&](SlamFilter& f, const Step& step, std::size_t k, std::vector<Observation>& z) {
-      z = associate(f, step, k, z);
+      try {
+        z = associate(f, step, k, z);
+      } catch (const py::cast_error&) {  // pybind11's message names no hook
+        throw InvalidArgument("run_loop: associate(filter, step, k, observations) must return a list of Observation");
+      }
     };
   }
   return loop(observers, options);

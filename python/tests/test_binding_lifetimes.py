@@ -92,6 +92,13 @@ def test_python_errors_in_hooks_pass_unchanged(world):
     with pytest.raises(KeyError):
         seif.run_loop(g, data, associate=drop_at_3)
 
+    # A hook that returns the wrong type is named, with the step.
+    h = seif.make_filter("ekf", seif.start_pose(data), paper_config(w))
+    with pytest.raises(seif.Error, match=r"step 0 .*associate\(filter, step, k, observations\) must return a list"):
+        seif.run_loop(h, data, associate=lambda filt, step, k, z: None)
+    with pytest.raises(seif.Error, match="stop\\(\\) must return True or False"):
+        seif.run_loop(h, data, stop=lambda: "soon")
+
 
 @pytest.mark.parametrize("threads", [1, 2])
 def test_a_failing_progress_callback_on_worker_threads_raises_instead_of_aborting(threads):
