@@ -191,3 +191,13 @@ def test_a_dataset_built_in_memory_has_its_stamps_checked():
     data.steps = [step, late]
     with pytest.raises(seif.InvalidArgument, match="step 1's time nan"):
         seif.run_filter(seif.make_filter("ekf", np.zeros(3), PAPER), data)
+
+
+def test_motion_models_refuse_a_non_finite_increment_and_a_singular_geometry():
+    velocity = seif.VelocityModel(0.1, 0.1)
+    with pytest.raises(seif.InvalidArgument, match="not finite"):
+        velocity.linearize(np.array([np.nan, 0.0, 0.0]), seif.VelocityControl(0.1, 0.0, 1.0))
+    # The encoder wheel on the turn's centre: the body speed is unbounded.
+    car = seif.AckermannModel(seif.AckermannGeometry(2.0, 2.0, np.zeros(2)), 0.1, 0.01)
+    with pytest.raises(seif.InvalidArgument, match="turn's centre"):
+        car.body_velocity(seif.AckermannControl(1.0, np.pi / 4, 0.1))

@@ -34,6 +34,18 @@ void requireDt(double dt) {
 
 }  // namespace
 
+void checkIncrement(const MotionIncrement& m, const std::string& who);
+
+namespace {
+/// The increment of a model's public linearize(): finite (a non-finite pose or input gives
+/// none), its noise positive semi-definite.
+MotionIncrement checked(const Pose2& x, MotionIncrement m, const char* who) {
+  if (!x.allFinite()) throw ModelError(std::string(who) + ": the pose is not finite");
+  checkIncrement(m, who);
+  return m;
+}
+}  // namespace
+
 void checkIncrement(const MotionIncrement& m, const std::string& who) {
   if (!m.delta.allFinite() || !m.J_delta_x.allFinite() || !m.U.allFinite()) {
     throw ModelError(who + ": the motion increment is not finite");
@@ -111,7 +123,7 @@ MotionIncrement VelocityModel::linearize(const Pose2& x, const VelocityControl& 
 }
 
 MotionIncrement VelocityModel::linearize(const Pose2& x, const MotionInput& u) const {
-  return linearize(x, inputOf<VelocityControl>(u, "the velocity", "velocity (v, w)"));
+  return checked(x, linearize(x, inputOf<VelocityControl>(u, "the velocity", "velocity (v, w)")), "velocity model");
 }
 
 // --- Ackermann -----------------------------------------------------------------------------
@@ -145,7 +157,7 @@ Eigen::Vector2d AckermannModel::bodyVelocity(const AckermannControl& u, Eigen::M
   }
   const double t = std::tan(u.steering);
   const double k = 1.0 - t * H / L;  // vc = ve / k
-  if (!(k > 0.0)) throw ModelError("Ackermann model: steering " + std::to_string(u.steering) + " rad puts the encoder wheel on the turn's centre");
+  if (!(k > 1e-9)) throw ModelError("Ackermann model: steering " + std::to_string(u.steering) + " rad puts the encoder wheel on the turn's centre");
   const double vc = u.speed / k;
   const double w = vc * t / L;
   if (J) {
@@ -179,7 +191,7 @@ MotionIncrement AckermannModel::linearize(const Pose2& x, const AckermannControl
 }
 
 MotionIncrement AckermannModel::linearize(const Pose2& x, const MotionInput& u) const {
-  return linearize(x, inputOf<AckermannControl>(u, "the Ackermann", "Ackermann (speed, steering)"));
+  return checked(x, linearize(x, inputOf<AckermannControl>(u, "the Ackermann", "Ackermann (speed, steering)")), "Ackermann model");
 }
 
 // --- relative odometry ---------------------------------------------------------------------
@@ -204,7 +216,8 @@ MotionIncrement OdometryModel::linearize(const Pose2& x, const OdometryIncrement
 }
 
 MotionIncrement OdometryModel::linearize(const Pose2& x, const MotionInput& u) const {
-  return linearize(x, inputOf<OdometryIncrement>(u, "the relative-odometry", "odometry (dx, dy, dtheta)"));
+  return checked(x, linearize(x, inputOf<OdometryIncrement>(u, "the relative-odometry", "odometry (dx, dy, dtheta)")),
+                 "odometry model");
 }
 
 }  // namespace seif

@@ -31,7 +31,7 @@ class MotionModel {
   /// One line for the console and metrics.json, with the parameters.
   virtual std::string describe() const = 0;
   /// The increment of input u at pose x. Throws ModelError when u is not this model's
-  /// input type or is not finite.
+  /// input type, or x, u or the increment is not finite.
   virtual MotionIncrement linearize(const Pose2& x, const MotionInput& u) const = 0;
   /// True when every increment is a fixed motion in the robot's frame: Delta(x, u) =
   /// Rot(theta) Delta_body(u) and U(x, u) = Rot(theta) U_body(u) Rot(theta)^T, whatever x
