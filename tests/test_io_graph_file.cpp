@@ -96,12 +96,14 @@ TEST(GraphFile, MalformedRecordsNameFileAndLine) {
   expectError(true, "VERTEX_XY 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n", "f:2", "both as a pose and as a landmark");
   // A second estimate of one vertex would be ignored or replace the first.
   expectError(true, "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 0 5 5 1\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n", "f:2", "listed twice");
+  expectError(true, "VERTEX_SE2 0 0 0 0\nVERTEX_SE2\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n", "f:2", "expected 5 fields");
   // A covariance whose information is not finite (1 / 1e-310), and the other way round.
   expectError(false, "ODOMETRY 0 1 1 0 0 1e-310 0 0 1e-310 0 1e-310\n", "f:1", "too close to singular");
   expectError(true, "EDGE_SE2 0 1 1 0 0 1e-310 0 0 1e-310 0 1e-310\n", "f:1", "too close to singular");
   // Angles beyond a turn are not angles.
   expectError(false, "ODOMETRY 0 1 1 0 1e300 0.01 0 0 0.01 0 0.01\n", "f:1", "more than a turn");
   expectError(false, "BR 0 9 7 2 0.1 0.1\n", "f:1", "more than a turn");
+  expectError(false, "BR 0 9 1e1 2 0.1 0.1\n", "f:1", "more than a turn");  // not "10 to the printed precision"
 }
 
 TEST(GraphFile, AByteOrderMarkIsNotData) {

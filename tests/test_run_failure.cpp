@@ -95,6 +95,44 @@ TEST(RunFailure, AStepThatFailsEndsTheRunWithTheOutputsOfTheStepsBeforeIt) {
   fs::remove_all(dir);
 }
 
+TEST(RunFailure, BadDataFurtherInTheStreamKeepsTheStepsBeforeItAndASmootherWritesNothing) {
+  const auto dir = scratchDir("run-failure-data");
+  const fs::path data = writeWorld(dir, 200);
+  {  // a letter in the 150th odometry row
+    std::istringstream in(slurp(data / "Robot1_Odometry.dat"));
+    std::string line, text;
+    int row = 0;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] != '#' && ++row == 150) line = line.substr(0, line.rfind('\t')) + "\t0.1x";
+      text += line + "\n";
+    }
+    std::ofstream(data / "Robot1_Odometry.dat") << text;
+  }
+  seif::RunRequest request;
+  request.dataset = data;
+  request.filter = "ekf";
+  request.trajectory_covariances = true;
+  fs::create_directories(dir / "filter");
+  const seif::RunReport r = seif::runDataset(request, dir / "filter");
+  ASSERT_TRUE(r.output.failure);
+  EXPECT_THROW(std::rethrow_exception(r.output.failure), seif::DataError);
+  EXPECT_GT(r.output.steps, 100u);
+  EXPECT_EQ(r.output.trajectory.size(), r.output.steps + 1);
+  EXPECT_EQ(r.output.pose_covariances.size(), r.output.steps + 1);
+  EXPECT_NE(nlohmann::json::parse(slurp(dir / "filter" / "metrics.json")).at("failure").get<std::string>().find(
+                "Robot1_Odometry.dat:"),
+            std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "filter" / "trajectory_cov.csv"));
+  // A smoother's estimate is its solve at the end: it fails whole, writing nothing.
+  request.smooth = true;
+  request.trajectory_covariances = false;
+  fs::create_directories(dir / "smooth");
+  EXPECT_THROW(seif::runDataset(request, dir / "smooth"), seif::DataError);
+  EXPECT_FALSE(fs::exists(dir / "smooth" / "metrics.json"));
+  EXPECT_FALSE(fs::exists(dir / "smooth" / "trajectory.tum"));
+  fs::remove_all(dir);
+}
+
 TEST(RunFailure, WhatAnEarlierRunWroteIsRemovedFirst) {
   const auto dir = scratchDir("run-stale");
   const fs::path data = writeWorld(dir, 50);
@@ -133,6 +171,11 @@ TEST(RunFailure, AResumedRunRefusesAnotherFilterAndSmoothing) {
   EXPECT_THROW(seif::runDataset(resume, dir / "b"), seif::InvalidArgument);
   resume.filter = "seif:active=4";  // the checkpoint's own: accepted
   EXPECT_NO_THROW(seif::runDataset(resume, dir / "b"));
+  const seif::RunRequest defaults;
+  resume.filter = defaults.filter;  // another option given as a flag: refused
+  resume.seif.active = 9;
+  EXPECT_THROW(seif::runDataset(resume, dir / "b"), seif::InvalidArgument);
+  resume.seif = defaults.seif;
   resume.smooth = true;
   EXPECT_THROW(seif::runDataset(resume, dir / "b"), seif::InvalidArgument);
   fs::remove_all(dir);
@@ -148,6 +191,9 @@ TEST(RunFailure, AnAssociationWindowThatCanNeverConfirmIsRefused) {
   EXPECT_NO_THROW(seif::Associator{o});
   o.confirm = 1;
   o.window = 0;
+  EXPECT_NO_THROW(seif::Associator{o});
+  o.confirm = 4;
+  o.method = seif::AssociationMethod::Known;  // which uses neither
   EXPECT_NO_THROW(seif::Associator{o});
 }
 

@@ -87,7 +87,7 @@ void addBenchCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--landmarks", args->landmarks, "comma-separated map sizes N")
       ->delimiter(',')
-      ->transform(integerIn(1, 100000000))
+      ->transform(integerIn(1, 10000000))  // the simulator's bound
       ->capture_default_str();
   cmd->add_option("--window", args->window, "steps timed at the end of the corridor (at most half of them)")
       ->transform(integerIn(1, 1000000))

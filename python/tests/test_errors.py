@@ -182,6 +182,10 @@ def test_models_and_filters_refuse_bad_noise_and_start():
     config.initial_pose_sigma = np.array([np.nan, 0.1, 0.1])
     with pytest.raises(seif.InvalidArgument, match="initial_pose_sigma"):
         seif.make_filter("ekf", np.zeros(3), config)
+    config.initial_pose_sigma = np.zeros(3)  # a known start: the EKF takes it, an information filter cannot
+    assert seif.make_filter("ekf", np.zeros(3), config).pose_covariance().max() == 0.0
+    with pytest.raises(seif.InvalidArgument, match="needs initial_pose_sigma > 0"):
+        seif.make_filter("seif", np.zeros(3), config)
 
 
 def test_a_dataset_built_in_memory_has_its_stamps_checked():

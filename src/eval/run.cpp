@@ -5,6 +5,7 @@
 #include "run_checkpoint.hpp"
 #include <seif/models/odometry_model.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <sstream>
@@ -122,6 +123,20 @@ class ProgressReporter : public RunObserver {
   std::function<void(std::size_t)> report_;
 };
 
+/// After a failure inside a step's observers, some records hold that step and others not:
+/// each is cut to the steps every one of them holds.
+void keepCompleteSteps(RunOutput& out, bool pose_covariances) {
+  std::size_t poses = std::min(out.trajectory.size(), out.dead_reckoning.size());
+  if (pose_covariances) poses = std::min(poses, out.pose_covariances.size());
+  out.steps = poses == 0 ? 0 : std::min(out.steps, poses - 1);
+  out.trajectory.resize(std::min(out.trajectory.size(), out.steps + 1));
+  out.dead_reckoning.resize(std::min(out.dead_reckoning.size(), out.steps + 1));
+  if (pose_covariances) out.pose_covariances.resize(std::min(out.pose_covariances.size(), out.steps + 1));
+  out.step_seconds.resize(std::min(out.step_seconds.size(), out.steps));
+  out.seconds = 0.0;
+  for (double t : out.step_seconds) out.seconds += t;
+}
+
 }  // namespace
 
 RunOutput runFilter(SlamFilter& filter, const Dataset& data,
@@ -174,10 +189,17 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
     runLoop(filter, source, steps, observers, options);
   } catch (const Error&) {  // what ran before it is kept (RunOutput::failure)
     out.failure = std::current_exception();
+    keepCompleteSteps(out, pose_covariances);
     out.final_stats = filter.stats();
     out.rejected_observations = filter.rejectedObservations();
   }
-  if (associator) associator->finish(filter);
+  if (associator) {
+    try {
+      associator->finish(filter);
+    } catch (const Error&) {
+      if (!out.failure) throw;  // else the run's own failure is the one reported
+    }
+  }
   if (progress) progress(1.0);
   out.dropped = source.dropped();
   if (steps.droppedBeforeFirstControl() > 0) out.dropped["before_first_control"] += steps.droppedBeforeFirstControl();

@@ -26,13 +26,18 @@ using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 /// `filter` (a spec) with the request's flags as the defaults of the options it does not set.
-FilterSpec requestedSpec(const RunRequest& request, std::string_view filter) {
+/// `filter` with the request's filter options (its flags) as defaults.
+FilterSpec flaggedSpec(const RunRequest& request, std::string_view filter) {
   FilterSpec defaults;
   defaults.linearization = request.linearization;
   defaults.iterations = request.iterations;
   defaults.seif = request.seif;
   defaults.batch = request.batch;
-  FilterSpec spec = parseFilterSpec(filter, defaults);
+  return parseFilterSpec(filter, defaults);
+}
+
+FilterSpec requestedSpec(const RunRequest& request, std::string_view filter) {
+  FilterSpec spec = flaggedSpec(request, filter);
   if (needsCovarianceBounds(request.association)) spec.seif.bounds = true;
   return spec;
 }
@@ -304,6 +309,74 @@ std::string associationOptionsText(const AssociationOptions& o) {
   return text;
 }
 
+/// What a run's report and outputs add to its RunOutput: errors against each reference,
+/// a smoother's figures, the association's ceiling; then the files written into `out`.
+void finishReport(const RunRequest& request, const std::filesystem::path& out, const SlamFilter& filter,
+                  const Associator& associator, Clock::time_point start, RunReport& report) {
+  const bool associating = associator.options().method != AssociationMethod::Known;
+  const std::exception_ptr failure = report.output.failure;
+  report.seconds_wall = secondsSince(start);
+  // An evaluation, not timed; it rereads the whole dataset, which a failed run did not get through.
+  if (associating && !failure && report.info.has_groundtruth && !report.info.landmarks.empty()) {
+    const auto reread = openDataset(request.dataset, request.format, request.dataset_options);
+    report.association_ceiling = associationCeiling(*reread, *report.info.sensor);
+  }
+  report.landmarks = filter.landmarkIds().size();
+  DatasetInfo scored_info = report.info;
+  if (associating) {  // the associator's landmarks against the true landmark each was started from
+    scored_info.landmarks.clear();
+    for (int id : filter.landmarkIds()) {
+      const auto it = report.info.landmarks.find(associator.truthOf(id));
+      if (it != report.info.landmarks.end()) scored_info.landmarks[id] = it->second;
+    }
+  }
+  report.errors = evaluateRun(filter, scored_info, report.output);
+  if (const SmootherReport* b = filter.smootherReport()) report.smoother = *b;
+  const SlamFilter* filtered = request.smooth ? smoothedFilter(filter) : nullptr;
+  if (filtered) {
+    RunOutput before = report.output;
+    before.trajectory = report.output.filter_trajectory;
+    report.filter_errors = evaluateRun(*filtered, scored_info, before);
+    double sum = 0.0;
+    for (int id : filter.landmarkIds()) sum += (filtered->landmark(id) - filter.landmark(id)).squaredNorm();
+    if (!filter.landmarkIds().empty()) report.filter_map_distance = std::sqrt(sum / static_cast<double>(filter.landmarkIds().size()));
+    const std::vector<TimedPose>& batch_poses = report.output.trajectory;
+    const std::vector<TimedPose>& filter_poses = report.output.filter_trajectory;
+    if (!batch_poses.empty() && batch_poses.size() == filter_poses.size()) {
+      std::vector<double> d(batch_poses.size());
+      double squares = 0.0;
+      for (std::size_t k = 0; k < d.size(); ++k) {
+        d[k] = (filter_poses[k].pose.head<2>() - batch_poses[k].pose.head<2>()).norm();
+        squares += d[k] * d[k];
+      }
+      report.filter_trajectory_distance = Vec2(std::sqrt(squares / static_cast<double>(d.size())), quantile(d, 0.5));
+    }
+    std::vector<double> ratios;
+    for (int id : filter.landmarkIds()) {
+      const double batch = filter.landmarkCovariance(id).trace();
+      if (batch > 0.0) ratios.push_back(filtered->landmarkCovariance(id).trace() / batch);
+    }
+    if (!ratios.empty()) {
+      report.filter_covariance_ratio = Vec3(quantile(ratios, 0.5), quantile(ratios, 0.1), quantile(ratios, 0.9));
+    }
+  }
+
+  const auto write_start = Clock::now();
+  writeTum(out / "trajectory.tum", report.output.trajectory);
+  writeTum(out / "dead_reckoning.tum", report.output.dead_reckoning);
+  writeMapCsv(out / "map.csv", filter, request.map_covariances);  // marginals computed here
+  if (filtered) {
+    writeTum(out / "trajectory_filter.tum", report.output.filter_trajectory);
+    writeMapCsv(out / "map_filter.csv", *filtered, request.map_covariances);
+  }
+  if (!report.output.gps.empty()) writeGpsCsv(out / "gps.csv", report.output.gps);  // for `seif plot`
+  if (request.trajectory_covariances) {
+    writeTrajectoryCovariance(out / "trajectory_cov.csv", report.output.trajectory, report.output.pose_covariances);
+  }
+  report.seconds_outputs = secondsSince(write_start);
+  writeFileAtomically(out / "metrics.json", metricsJson(request, report));
+}
+
 }  // namespace
 
 RunReport runDataset(const RunRequest& request, const std::filesystem::path& out,
@@ -325,7 +398,8 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   checkpointing.path = request.checkpoint;
   checkpointing.values = {{"dataset", std::filesystem::absolute(request.dataset).lexically_normal().string()},
                           {"dataset-options", datasetOptionsText(source->info().format, request.dataset_options)},
-                          {"filter", request.filter}};
+                          {"filter", request.filter},
+                          {"filter-spec", canonicalFilterSpec(flaggedSpec(request, request.filter))}};
   std::unique_ptr<SlamFilter> filter;
   std::optional<RunResume> resume;
   if (!request.resume.empty()) {
@@ -342,14 +416,28 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
       throw DataError(name, 0, "the checkpoint's run read its dataset with " + o->second + ", this run with " +
                                    checkpointing.values["dataset-options"] + " (give the same options)");
     }
-    // The filter is the checkpoint's: a spec given that differs, or smoothing (which keeps
-    // every measurement and so has no checkpoint), would be silently ignored.
-    if (request.filter != RunRequest{}.filter && request.filter != extras.values["filter"]) {
-      throw InvalidArgument("resume: the checkpoint's run is of " + extras.values["filter"] + "; this run asks for " +
-                            request.filter + " (give it, or no filter: a resumed run continues the checkpoint's filter)");
+    // The filter is the checkpoint's: a spec or filter options given (the request is not the
+    // defaults) that differ from its run's, or smoothing (which keeps every measurement and
+    // so has no checkpoint), would be silently ignored. Compared as canonical specs; a
+    // checkpoint from before they were recorded is compared by its spec's text.
+    RunRequest unasked;
+    const std::string asked = canonicalFilterSpec(flaggedSpec(request, request.filter));
+    if (asked != canonicalFilterSpec(flaggedSpec(unasked, unasked.filter))) {
+      const auto ran = extras.values.find("filter-spec");
+      const std::string ran_spec = ran != extras.values.end() ? ran->second
+                                                              : canonicalFilterSpec(parseFilterSpec(extras.values["filter"]));
+      if (asked != ran_spec) {
+        throw InvalidArgument("resume: the checkpoint's run is of " + ran_spec + "; this run asks for " + asked +
+                              " (give it, or no filter or filter options: a resumed run continues the checkpoint's filter)");
+      }
     }
     if (request.smooth) throw InvalidArgument("resume: a run resumed from a checkpoint cannot be smoothed (--smooth)");
     checkpointing.values["filter"] = extras.values["filter"];
+    if (const auto ran = extras.values.find("filter-spec"); ran != extras.values.end()) {
+      checkpointing.values["filter-spec"] = ran->second;
+    } else {
+      checkpointing.values.erase("filter-spec");
+    }
     resume = runResumeFrom(extras.values, static_cast<std::size_t>(extras.steps_consumed), name);
   } else {
     const FilterSpec spec = requestedSpec(request, request.filter);
@@ -381,71 +469,19 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   report.info = source->info();
   source.reset();
   const std::exception_ptr failure = report.output.failure;
-  if (failure && report.output.steps == 0) std::rethrow_exception(failure);  // nothing to write
+  // Nothing to write: no step ran, or a smoother's (whose estimate is its solve, at the end).
+  const bool smoother = request.smooth || (!resume && flaggedSpec(request, request.filter).name == "batch");
+  if (failure && (report.output.steps == 0 || smoother)) std::rethrow_exception(failure);
   if (report.output.steps == 0 && report.output.interrupted && !resume) {
     throw Interrupted("run interrupted before its first step: nothing written to " + out.string());
   }
   if (report.output.steps == 0 && !report.output.interrupted && !failure) throw DataError(request.dataset.string(), 0, "the dataset holds no step to run (no control or odometry)");
-  report.seconds_wall = secondsSince(start);
-  // An evaluation, not timed; it rereads the whole dataset, which a failed run did not get through.
-  if (associating && !failure && report.info.has_groundtruth && !report.info.landmarks.empty()) {
-    const auto reread = openDataset(request.dataset, request.format, request.dataset_options);
-    report.association_ceiling = associationCeiling(*reread, *report.info.sensor);
+  try {
+    finishReport(request, out, *filter, associator, start, report);
+  } catch (...) {
+    if (failure) std::rethrow_exception(failure);  // the run's own failure is the one reported
+    throw;
   }
-  report.landmarks = filter->landmarkIds().size();
-  DatasetInfo scored_info = report.info;
-  if (associating) {  // the associator's landmarks against the true landmark each was started from
-    scored_info.landmarks.clear();
-    for (int id : filter->landmarkIds()) {
-      const auto it = report.info.landmarks.find(associator.truthOf(id));
-      if (it != report.info.landmarks.end()) scored_info.landmarks[id] = it->second;
-    }
-  }
-  report.errors = evaluateRun(*filter, scored_info, report.output);
-  if (const SmootherReport* b = filter->smootherReport()) report.smoother = *b;
-  const SlamFilter* filtered = request.smooth ? smoothedFilter(*filter) : nullptr;
-  if (filtered) {
-    RunOutput before = report.output;
-    before.trajectory = report.output.filter_trajectory;
-    report.filter_errors = evaluateRun(*filtered, scored_info, before);
-    double sum = 0.0;
-    for (int id : filter->landmarkIds()) sum += (filtered->landmark(id) - filter->landmark(id)).squaredNorm();
-    if (!filter->landmarkIds().empty()) report.filter_map_distance = std::sqrt(sum / static_cast<double>(filter->landmarkIds().size()));
-    const std::vector<TimedPose>& batch_poses = report.output.trajectory;
-    const std::vector<TimedPose>& filter_poses = report.output.filter_trajectory;
-    if (!batch_poses.empty() && batch_poses.size() == filter_poses.size()) {
-      std::vector<double> d(batch_poses.size());
-      double squares = 0.0;
-      for (std::size_t k = 0; k < d.size(); ++k) {
-        d[k] = (filter_poses[k].pose.head<2>() - batch_poses[k].pose.head<2>()).norm();
-        squares += d[k] * d[k];
-      }
-      report.filter_trajectory_distance = Vec2(std::sqrt(squares / static_cast<double>(d.size())), quantile(d, 0.5));
-    }
-    std::vector<double> ratios;
-    for (int id : filter->landmarkIds()) {
-      const double batch = filter->landmarkCovariance(id).trace();
-      if (batch > 0.0) ratios.push_back(filtered->landmarkCovariance(id).trace() / batch);
-    }
-    if (!ratios.empty()) {
-      report.filter_covariance_ratio = Vec3(quantile(ratios, 0.5), quantile(ratios, 0.1), quantile(ratios, 0.9));
-    }
-  }
-
-  const auto write_start = Clock::now();
-  writeTum(out / "trajectory.tum", report.output.trajectory);
-  writeTum(out / "dead_reckoning.tum", report.output.dead_reckoning);
-  writeMapCsv(out / "map.csv", *filter, request.map_covariances);  // marginals computed here
-  if (filtered) {
-    writeTum(out / "trajectory_filter.tum", report.output.filter_trajectory);
-    writeMapCsv(out / "map_filter.csv", *filtered, request.map_covariances);
-  }
-  if (!report.output.gps.empty()) writeGpsCsv(out / "gps.csv", report.output.gps);  // for `seif plot`
-  if (request.trajectory_covariances) {
-    writeTrajectoryCovariance(out / "trajectory_cov.csv", report.output.trajectory, report.output.pose_covariances);
-  }
-  report.seconds_outputs = secondsSince(write_start);
-  writeFileAtomically(out / "metrics.json", metricsJson(request, report));
   return report;
 }
 

@@ -13,7 +13,7 @@ namespace seif {
 EifSlam::EifSlam(const Pose2& initial_pose, const FilterConfig& config)
     : SlamFilter(config), config_(config), book_("eif", initial_pose, config), H_(Mat3::Zero()), b_(Vec3::Zero()), mu_(initial_pose) {
   checkFilterOptions("eif", config);  // each range as its spec and flag have it
-  H_.diagonal() = config.initial_pose_sigma.cwiseAbs2().cwiseInverse();
+  H_.diagonal() = startInformation(config.initial_pose_sigma, "eif");
   b_ = H_ * mu_;
 }
 

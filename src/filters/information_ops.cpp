@@ -16,6 +16,14 @@
 
 namespace seif {
 
+Vec3 startInformation(const Vec3& initial_pose_sigma, const std::string& filter) {
+  if (!(initial_pose_sigma.minCoeff() >= 1e-100)) {
+    throw InvalidArgument(filter + ": an information filter needs initial_pose_sigma > 0 (its start information is "
+                          "1 / sigma^2)");
+  }
+  return initial_pose_sigma.cwiseAbs2().cwiseInverse();
+}
+
 Mat3 invertibleMotionJacobian(const Mat3& J_delta_x) {
   const Mat3 G = Mat3::Identity() + J_delta_x;
   const double det = G.determinant();

@@ -18,6 +18,10 @@ namespace seif {
 /// motion update inverts it. Deferred motion checks each increment with it as it comes.
 Mat3 invertibleMotionJacobian(const Mat3& J_delta_x);
 
+/// The start's information 1 / initial_pose_sigma^2 of an information filter (EIF, SEIF).
+/// Throws InvalidArgument for a zero sigma, whose information is not finite.
+Vec3 startInformation(const Vec3& initial_pose_sigma, const std::string& filter);
+
 /// Motion update in information form, paper Lemma 3 / algorithm.md §1, on a dense
 /// symmetric matrix whose first three rows and columns are the robot pose:
 ///   Phi = G^-T H G^-1,  kappa = Phi S_x (U^-1 + S_x^T Phi S_x)^-1 S_x^T Phi,

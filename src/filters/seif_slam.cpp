@@ -20,7 +20,7 @@ SeifSlam::SeifSlam(const Pose2& initial_pose, const FilterConfig& config, const 
       config_(config),
       book_("seif", initial_pose, config),
       options_(options),
-      store_(config.initial_pose_sigma.cwiseAbs2().cwiseInverse().asDiagonal(), initial_pose),
+      store_(startInformation(config.initial_pose_sigma, "seif").asDiagonal(), initial_pose),
       rng_(options.seed),
       frontier_(options.wildfire, options.relax, kMaxLocalLandmarks) {
   checkFilterOptions("seif", config, &options);  // each range as its spec and flag have it

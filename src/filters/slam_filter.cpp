@@ -50,12 +50,13 @@ std::shared_ptr<const Model> required(const std::shared_ptr<const Model>& model,
 
 SlamFilter::SlamFilter(const FilterConfig& config)
     : motion_(required(config.motion, "motion")), sensor_(required(config.sensor, "sensor")) {
-  // Each filter starts from the variance (EKF) or information (EIF, SEIF) these give.
+  // Each filter starts from the variance these give (0: a known start; the information
+  // filters need > 0, startInformation()).
   for (Eigen::Index i = 0; i < 3; ++i) {
     const double s = config.initial_pose_sigma(i);
-    if (!(s >= 1e-100 && s <= 1e100)) {
-      throw InvalidArgument("FilterConfig: initial_pose_sigma must be in [1e-100, 1e100] (finite and > 0), found " +
-                            std::to_string(s) + " in component " + std::to_string(i));
+    if (!(s >= 0.0 && s <= 1e100)) {
+      throw InvalidArgument("FilterConfig: initial_pose_sigma must be in [0, 1e100], found " + std::to_string(s) +
+                            " in component " + std::to_string(i));
     }
   }
 }

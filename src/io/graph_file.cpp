@@ -228,11 +228,6 @@ class GraphSource final : public EventSource {
   }
 
   void vertex(bool pose) {
-    // A vertex's estimate is read once (the chain's first pose starts the run): a second one
-    // for the same id would be ignored, or replace the first.
-    if (const auto [it, fresh] = vertex_line_.emplace(table_.index(1), table_.line()); !fresh) {
-      table_.fail("vertex " + std::to_string(it->first) + " listed twice (first on line " + std::to_string(it->second) + ")");
-    }
     if (pose) {
       table_.expect({"VERTEX_SE2", "id", "x", "y", "theta"});
       claim(table_.index(1), Kind::Pose, 1);
@@ -242,6 +237,11 @@ class GraphSource final : public EventSource {
       claim(table_.index(1), Kind::Landmark, 1);
       table_.real(2);
       table_.real(3);
+    }
+    // A vertex's estimate is read once (the chain's first pose starts the run): a second one
+    // for the same id would be ignored, or replace the first.
+    if (const auto [it, fresh] = vertex_line_.emplace(table_.index(1), table_.line()); !fresh) {
+      table_.fail("vertex " + std::to_string(it->first) + " listed twice (first on line " + std::to_string(it->second) + ")");
     }
   }
 

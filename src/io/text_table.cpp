@@ -138,7 +138,8 @@ double TextTable::real(std::size_t col) const {
 double TextTable::angle(std::size_t col) const {
   const double value = real(col);
   constexpr double kTurn = 6.283185307179586;
-  if (std::abs(value) > kTurn + halfUnit(col)) {
+  // The printed precision's slack, but never more than half a radian ("1e1" is not 2 pi).
+  if (std::abs(value) > kTurn + std::min(halfUnit(col), 0.5)) {
     fail("angle " + quotedField(fields_[col]) + " rad in " + columnName(col) + " is more than a turn (2 pi)");
   }
   return value;

@@ -52,8 +52,9 @@ struct RunRequest {
   std::size_t checkpoint_every = 0;
   std::filesystem::path checkpoint;
   /// Resume the run saved in this checkpoint (of the same dataset): the filter is the
-  /// checkpoint's (`filter` and `seif` are not used), the steps it consumed are skipped, and
-  /// the outputs equal those of the run that was never interrupted.
+  /// checkpoint's (`filter` and the filter options, when not the defaults, must be its run's:
+  /// InvalidArgument otherwise, as for `smooth`), the steps it consumed are skipped, and the
+  /// outputs equal those of the run that was never interrupted.
   std::filesystem::path resume;
   std::string command_line;     ///< recorded in metrics.json
   /// Set to true (from another thread or a signal handler) to stop the run before its next
