@@ -320,3 +320,8 @@ TEST(ConsistencyMrclam, RealRunsMeasureNeesAgainstViconAndTheSurveyedLandmarks) 
   EXPECT_EQ(j.at("datasets").size(), 2u);
   EXPECT_THROW(seif::mrclamConsistencyRuns(folder, {6}), seif::InvalidArgument);
 }
+
+TEST(Consistency, ARobotListedTwiceIsNotTwoRuns) {
+  // Refused before any file is read.
+  EXPECT_THROW(seif::mrclamConsistencyRuns("/nonexistent", {1, 1}), seif::InvalidArgument);
+}

@@ -106,6 +106,20 @@ TEST(GraphFile, MalformedRecordsNameFileAndLine) {
   expectError(false, "BR 0 9 1e1 2 0.1 0.1\n", "f:1", "more than a turn");  // not "10 to the printed precision"
 }
 
+TEST(GraphFile, ConvertRefusesWhatItCannotWriteFinitelyOrAtAll) {
+  const fs::path dir = fs::temp_directory_path() / "seif-convert-refusals";
+  fs::create_directories(dir);
+  // Each increment is finite; their sum, the g2o vertex, is not.
+  std::ofstream(dir / "far.txt") << "ODOMETRY 0 1 1e308 0 0 0.01 0 0 0.01 0 0.01\n"
+                                    "ODOMETRY 1 2 1e308 0 0 0.01 0 0 0.01 0 0.01\n";
+  EXPECT_THROW(convertDataset(dir / "far.txt", DatasetFormat::Isam, dir / "far.g2o", GraphFormat::G2o), DataError);
+  EXPECT_FALSE(fs::exists(dir / "far.g2o"));
+  std::ofstream(dir / "vertices.g2o") << "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_XY 5 2 2\n";
+  EXPECT_THROW(convertDataset(dir / "vertices.g2o", DatasetFormat::Auto, dir / "v.txt", GraphFormat::Isam), DataError);
+  EXPECT_FALSE(fs::exists(dir / "v.txt"));
+  fs::remove_all(dir);
+}
+
 TEST(GraphFile, AByteOrderMarkIsNotData) {
   const std::string text = "ODOMETRY 0 1 1 0 0 0.01 0 0 0.01 0 0.01\nODOMETRY 1 2 1 0 0 0.01 0 0 0.01 0 0.01\n";
   const std::string marked_text = "\xEF\xBB\xBF" + text;  // the sources read the text in place

@@ -209,6 +209,8 @@ TEST(RunFailure, FilterSpecsRefuseRepeatedKeysEmptyItemsAndLists) {
   }
   EXPECT_EQ(seif::parseFilterSpec("seif:profile=consistent,active=20").seif.active, 20);
   EXPECT_THROW(seif::splitFilterList("ekf,,seif"), seif::InvalidArgument);
+  EXPECT_THROW(seif::splitFilterList("ekf,seif,ekf"), seif::InvalidArgument);  // two rows alike
+  EXPECT_EQ(seif::splitFilterList("ekf:linearization=invariant,iterations=2,ekf").size(), 2u);
   EXPECT_THROW(seif::splitFilterList(""), seif::InvalidArgument);
 }
 

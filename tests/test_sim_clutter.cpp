@@ -296,10 +296,11 @@ TEST(CliDetections, RawVictoriaParkReachesTheFilterWithoutLandmarkIds) {
   const std::string vp = std::string(SEIF_SHARED_DATA_DIR) + "/victoria-park";
   if (!fs::exists(vp + "/tree_detections.txt")) GTEST_SKIP() << "Victoria Park not found at " << vp;
   const auto dir = test::scratchDir("cli-raw-vp");
-  // Expected to fail until an associator exists: today's filters need landmark ids.
+  // Known association needs landmark ids: refused before the run, a usage error naming the cure.
   const auto r = test::runCli("run --dataset " + vp + " --detections raw --out " + dir.string());
-  EXPECT_EQ(r.status, 2);
-  EXPECT_NE(r.err.find("no landmark id"), std::string::npos) << r.err;
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("no landmark id; associate them (--association nn or jcbb)"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "metrics.json"));
   fs::remove_all(dir);
 }
 

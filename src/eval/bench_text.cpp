@@ -56,8 +56,8 @@ std::string benchTargetsText(const BenchTargets& t) {
                   g->to_landmarks, g->from_landmarks, g->to_us, g->from_us, g->ratio, g->met ? "met" : "NOT met");
   }
   if (const auto& s = t.ekf_over_seif) {
-    appendf(text, "EKF / SEIF median at N=%d: %.1f / %.1f us = %.0fx (target >= 100x): %s\n", s->landmarks,
-                  s->ekf_us, s->seif_us, s->ratio, s->met ? "met" : "NOT met");
+    appendf(text, "EKF / SEIF median at N=%d: %.1f / %.1f us = %.*fx (target >= 100x): %s\n", s->landmarks,
+                  s->ekf_us, s->seif_us, s->ratio >= 10.0 ? 0 : 2, s->ratio, s->met ? "met" : "NOT met");
   }
   if (!t.seif_bytes_per_landmark.empty()) {
     appendf(text, "SEIF memory per landmark (filter peak / mapped):");

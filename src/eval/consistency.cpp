@@ -222,6 +222,9 @@ std::vector<ConsistencyDataset> mrclamConsistencyRuns(const std::filesystem::pat
   std::vector<ConsistencyDataset> out;
   for (int robot : robots) {
     if (robot < 1 || robot > 5) throw InvalidArgument("consistency: MRCLAM robot " + std::to_string(robot) + " is not in 1..5");
+    if (std::count(robots.begin(), robots.end(), robot) > 1) {  // one run counted twice is not two runs
+      throw InvalidArgument("consistency: MRCLAM robot " + std::to_string(robot) + " listed twice");
+    }
     DatasetOptions o;
     o.robot = robot;
     const std::unique_ptr<EventSource> source = openDataset(folder, DatasetFormat::Mrclam, o);

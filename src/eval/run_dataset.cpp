@@ -364,7 +364,14 @@ void finishReport(const RunRequest& request, const std::filesystem::path& out, c
   const auto write_start = Clock::now();
   writeTum(out / "trajectory.tum", report.output.trajectory);
   writeTum(out / "dead_reckoning.tum", report.output.dead_reckoning);
-  writeMapCsv(out / "map.csv", filter, request.map_covariances);  // marginals computed here
+  try {
+    writeMapCsv(out / "map.csv", filter, request.map_covariances);  // marginals computed here
+  } catch (const Error&) {
+    // A failed run's filter may hold information no factorisation takes: its map, then,
+    // without covariances (the run's own failure is reported).
+    if (!failure || !request.map_covariances) throw;
+    writeMapCsv(out / "map.csv", filter, false);
+  }
   if (filtered) {
     writeTum(out / "trajectory_filter.tum", report.output.filter_trajectory);
     writeMapCsv(out / "map_filter.csv", *filtered, request.map_covariances);
@@ -392,6 +399,12 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   config.iterations = request.iterations;
   if (request.checkpoint_every > 0 && request.checkpoint.empty()) {
     throw InvalidArgument("checkpoints: checkpoint_every needs a checkpoint file");
+  }
+  // The raw detections carry no landmark id: known association would fail at the first one.
+  if (request.dataset_options.detections == Detections::Raw && request.resume.empty() &&
+      request.association.method == AssociationMethod::Known && !request.association.drop_unlabelled) {
+    throw InvalidArgument("--detections raw: the detections carry no landmark id; associate them (--association nn "
+                          "or jcbb), or drop them with known association (--drop-unlabelled)");
   }
   RunCheckpointing checkpointing;
   checkpointing.every = request.checkpoint_every;

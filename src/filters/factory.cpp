@@ -297,6 +297,11 @@ std::vector<std::string> splitFilterList(std::string_view list) {
     if (comma == std::string_view::npos) break;
     list = list.substr(comma + 1);
   }
+  for (std::size_t i = 0; i < specs.size(); ++i) {  // two rows of one filter could not be told apart
+    if (std::find(specs.begin(), specs.begin() + static_cast<std::ptrdiff_t>(i), specs[i]) != specs.begin() + static_cast<std::ptrdiff_t>(i)) {
+      throw InvalidArgument("filter list '" + whole + "': " + specs[i] + " listed twice");
+    }
+  }
   return specs;
 }
 

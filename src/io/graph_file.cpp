@@ -383,6 +383,9 @@ void writeGraph(const std::filesystem::path& file, EventSource& source, GraphFor
       const auto& u = std::get<OdometryIncrement>(c->input);
       if (g2o) {
         x = odometry.apply(x, c->input);
+        if (!x.allFinite()) {  // 1e308 twice is finite in the file, not in the sum
+          throw DataError(source.info().source, 0, "pose " + std::to_string(c->pose) + ", the odometry chained, is not finite");
+        }
         w.tag("VERTEX_SE2") << c->pose << x.x() << x.y() << x.z(), w.end();
         w.tag("EDGE_SE2") << pose << c->pose << u.delta.x() << u.delta.y() << u.delta.z();
         w.upper<3>(invert<3>(u.covariance)).end();
@@ -413,6 +416,7 @@ void writeGraph(const std::filesystem::path& file, EventSource& source, GraphFor
       }
     }
   }
+  if (pose < 0) throw DataError(source.info().source, 0, "no record to convert (odometry or observation)");
   out.commit();
 }
 
