@@ -158,7 +158,11 @@ class VictoriaParkSource final : public EventSource {
       advance(controls_, {"time", "speed", "steering"});
     } else {
       const TextTable& r = *gps_.table;
-      event = GpsFix{t, Vec2(r.real(1), r.real(2))};
+      const Vec2 fix(r.real(1), r.real(2));
+      // Local metres: beyond the Earth's size a fix is a corrupt value (its square, in the
+      // GPS error, would overflow).
+      if (fix.cwiseAbs().maxCoeff() > 1e8) r.fail("GPS fix (" + formatDouble(fix.x()) + ", " + formatDouble(fix.y()) + ") is not in local metres");
+      event = GpsFix{t, fix};
       advance(gps_, {"time", "x", "y"});
     }
     return true;
