@@ -103,7 +103,8 @@ TEST(GraphFile, MalformedRecordsNameFileAndLine) {
   // Angles beyond a turn are not angles.
   expectError(false, "ODOMETRY 0 1 1 0 1e300 0.01 0 0 0.01 0 0.01\n", "f:1", "more than a turn");
   expectError(false, "BR 0 9 7 2 0.1 0.1\n", "f:1", "more than a turn");
-  expectError(false, "BR 0 9 1e1 2 0.1 0.1\n", "f:1", "more than a turn");  // not "10 to the printed precision"
+  expectError(false, "BR 0 9 1e1 2 0.1 0.1\n", "f:1", "more than a turn");
+  expectError(false, "BR 0 9 0.1 2e6 0.1 0.1\n", "f:1", "beyond 10^6 m");  // not "10 to the printed precision"
 }
 
 TEST(GraphFile, ConvertRefusesWhatItCannotWriteFinitelyOrAtAll) {

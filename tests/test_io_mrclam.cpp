@@ -376,6 +376,11 @@ TEST_F(MrclamCorrupt, ABearingOfMoreThanATurn) {
   expectError("Robot2_Measurement.dat", kFirstDataLine + 2, "angle '1e300' rad in column 4 (bearing) is more than a turn");
 }
 
+TEST_F(MrclamCorrupt, ARangeBeyondAThousandKilometres) {
+  replaceLine(file("Robot2_Measurement.dat"), kFirstDataLine + 2, "1248444187.356\t107\t1e300\t0.1");
+  expectError("Robot2_Measurement.dat", kFirstDataLine + 2, "range 1e+300 m is beyond 10^6 m");
+}
+
 TEST_F(MrclamCorrupt, NoBarcode) {
   std::ofstream(file("Barcodes.dat")) << "# Subject #    Barcode #\n";
   expectError("Barcodes.dat", 1, "no barcode listed");

@@ -25,6 +25,10 @@
 
 namespace seif {
 
+/// The largest range a reader takes, in metres: beyond it a value is corrupt (its landmark
+/// would be placed, and its information computed, out of all proportion).
+inline constexpr double kMaxRange = 1e6;
+
 class TextTable {
  public:
   /// Most fields a line may have (g2o's EDGE_SE2 has 12).

@@ -55,6 +55,7 @@ double laserAngle(const TextTable& r, std::size_t col) {
 double positiveRange(const TextTable& r, std::size_t col) {
   const double range = r.real(col);
   if (!(range > 0.0)) r.fail("range " + formatDouble(range) + " must be positive");
+  if (range > kMaxRange) r.fail("range " + formatDouble(range) + " m is beyond 10^6 m");
   return range;
 }
 
