@@ -122,6 +122,14 @@ TEST(RunStop, AnAssociatingRunStoppedAndResumedEqualsTheWholeRun) {
     ASSERT_TRUE(stopped.output.interrupted);
     EXPECT_EQ(stopped.output.steps, 1025u);
     ASSERT_GT(stopped.association->new_landmarks, 0u);  // stopped with a map and provisional landmarks
+    // A stop also stops the removal of the provisional landmarks in the filter: they stay in
+    // the stopped run's map, counted (held ones are only forgotten).
+    if (place == seif::ProvisionalPlace::Filter) {
+      EXPECT_GT(stopped.association->provisional_final, 0u);
+    } else {
+      EXPECT_EQ(stopped.association->provisional_final, 0u);
+    }
+    EXPECT_EQ(stopped.landmarks, stopped.association->landmarks_final);
 
     seif::RunRequest resume;  // the association comes with the checkpoint
     resume.dataset = data;

@@ -567,7 +567,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   s.counts.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void Associator::finish(SlamFilter& filter) {
+void Associator::finish(SlamFilter& filter, const std::atomic<bool>* stop) {
   Impl& s = *impl_;
   s.scan_record.open = false;
   s.dropUnapplied(filter);
@@ -584,7 +584,9 @@ void Associator::finish(SlamFilter& filter) {
       ++c.provisional_removed;
       continue;
     }
-    if (filter.smoother()) {
+    // A removal may cost much in a dense map (the SEIF's fill-in among a landmark's links):
+    // an interrupted run keeps the rest (provisional_final).
+    if (filter.smoother() || (stop != nullptr && stop->load(std::memory_order_relaxed))) {
       ++c.provisional_final;
       continue;
     }

@@ -195,7 +195,7 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
   }
   if (associator) {
     try {
-      associator->finish(filter);
+      associator->finish(filter, stop);
     } catch (const Error&) {
       if (!out.failure) throw;  // else the run's own failure is the one reported
     }

@@ -92,9 +92,11 @@ std::string runSummary(const RunRequest& request, const RunReport& r, const std:
                   a.scored == 0 ? 0.0 : 100.0 * double(a.correct) / double(a.scored), a.wrong, a.unlabelled,
                   a.unlabelled_matched);
     appendf(text, "    %zu landmarks started, %zu provisional removed, %zu merged, %zu ambiguous dropped; %zu landmarks at "
-                  "the end (%zu spurious, %zu duplicates); %.2f s associating%s\n",
+                  "the end (%zu spurious, %zu duplicates%s); %.2f s associating%s\n",
                   a.new_landmarks, a.provisional_removed, a.merged, a.ambiguous_dropped, a.landmarks_final, a.spurious_landmarks,
-                  a.duplicate_landmarks, a.seconds,
+                  a.duplicate_landmarks,
+                  a.provisional_final > 0 ? (", " + std::to_string(a.provisional_final) + " still provisional").c_str() : "",
+                  a.seconds,
                   a.jcbb_truncated > 0 ? (", " + std::to_string(a.jcbb_truncated) + " JCBB searches truncated").c_str() : "");
     if (const auto& c = r.association_ceiling; c && c->observations > 0) {
       appendf(text, "    ceiling (the true map seen from the true pose): %.2f %% individually, %.2f %% jointly of %zu "

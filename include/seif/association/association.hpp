@@ -9,6 +9,7 @@
 // never from a scan of the map. docs/association.md has the rules and their defaults.
 #include <seif/filters/slam_filter.hpp>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -137,7 +138,7 @@ struct AssociationCounts {
   std::size_t ambiguous_dropped = 0;  ///< between the gates: dropped
   std::size_t unlabelled_dropped = 0;  ///< known, drop_unlabelled: without a landmark id, dropped
   std::size_t provisional_removed = 0;  ///< provisional landmarks not confirmed in time
-  std::size_t provisional_final = 0;    ///< still provisional at the end (a smoother's map keeps them)
+  std::size_t provisional_final = 0;    ///< still provisional at the end, kept in the map (a smoother, a stop)
   std::size_t merged = 0;             ///< landmarks merged into another
   std::size_t jcbb_truncated = 0;     ///< scans whose search reached jcbb_nodes
   std::size_t landmarks_final = 0;    ///< landmarks in the map at finish()
@@ -174,8 +175,10 @@ class Associator {
   /// finish() has run. (The run loop stops at a refused update instead.)
   void discardScan();
   /// After the run: removes the landmarks still provisional (not from a smoother) and
-  /// scores the association (landmarks_final, correct, spurious, duplicates, ...).
-  void finish(SlamFilter& filter);
+  /// scores the association (landmarks_final, correct, spurious, duplicates, ...). Once
+  /// `stop` is set (an interrupted run) the removals stop: the landmarks left keep their
+  /// place in the map and are counted in provisional_final, as a smoother's are.
+  void finish(SlamFilter& filter, const std::atomic<bool>* stop = nullptr);
 
   const AssociationCounts& counts() const;
   /// Landmark `id`'s label: the truth id most of its observations carried (kUnknownLandmark
