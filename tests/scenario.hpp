@@ -4,9 +4,12 @@
 #include <seif/core/angles.hpp>
 #include <seif/core/dataset.hpp>
 #include <seif/filters/slam_filter.hpp>
+#include <seif/io/mrclam.hpp>
 #include <seif/models/range_bearing.hpp>
+#include <seif/sim/world.hpp>
 #include "models/velocity_motion.hpp"
 
+#include <filesystem>
 #include <random>
 #include <vector>
 
@@ -59,6 +62,14 @@ inline Scenario makeScenario(std::uint64_t seed, int landmarks, int steps,
     s.steps.push_back(std::move(step));
   }
   return s;
+}
+
+/// The paper's world over `steps` steps (50 landmarks, seed 3), written as an MRCLAM folder
+/// `dir`/data, which it returns.
+inline std::filesystem::path writePaperWorld(const std::filesystem::path& dir, int steps) {
+  const std::filesystem::path data = dir / "data";
+  writeMrclam(data, simulate(presetConfig(WorldPreset::Paper, 50, steps, 3)));
+  return data;
 }
 
 }  // namespace seif::test

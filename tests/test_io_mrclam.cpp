@@ -111,7 +111,7 @@ RobotLog syntheticLog() {
   log.robot = 2;
   const double t0 = 1248444187.156;
   const double odd[] = {0.1, 1.0 / 3.0, -0.0, 5e-324, std::nextafter(1.0, 2.0), -2.0 / 7.0,
-                        1e300, std::numbers::pi};
+                        1e-300, std::numbers::pi};
   for (int i = 0; i < 40; ++i) {
     log.odometry.push_back({t0 + 0.0137 * i, odd[i % 8], odd[(i + 3) % 8]});
   }
@@ -379,6 +379,13 @@ TEST_F(MrclamCorrupt, ABearingOfMoreThanATurn) {
 TEST_F(MrclamCorrupt, ARangeBeyondAThousandKilometres) {
   replaceLine(file("Robot2_Measurement.dat"), kFirstDataLine + 2, "1248444187.356\t107\t1e300\t0.1");
   expectError("Robot2_Measurement.dat", kFirstDataLine + 2, "range 1e+300 m is beyond 10^6 m");
+}
+
+TEST_F(MrclamCorrupt, AControlFasterThanAnyVehicle) {
+  replaceLine(file("Robot2_Odometry.dat"), kFirstDataLine + 7, "1248444187.2519\t-2e3\t0.1");
+  expectError("Robot2_Odometry.dat", kFirstDataLine + 7, "speed -2000 m/s is beyond 10^3 m/s");
+  replaceLine(file("Robot2_Odometry.dat"), kFirstDataLine + 7, "1248444187.2519\t0.1\t1e300");
+  expectError("Robot2_Odometry.dat", kFirstDataLine + 7, "turn rate 1e+300 rad/s is beyond 10^3 rad/s");
 }
 
 TEST_F(MrclamCorrupt, NoBarcode) {

@@ -298,6 +298,7 @@ TEST(VictoriaPark, MalformedLinesNameFileAndLine) {
   expectDataError("controls.txt", "1.0 abc 0.1\n", "vp/controls.txt:1", "bad number 'abc'");
   expectDataError("controls.txt", "2.0 1 0\n1.0 1 0\n", "vp/controls.txt:2", "goes backwards");
   expectDataError("controls.txt", "1.0 1 2.0\n", "vp/controls.txt:1", "steering");
+  expectDataError("controls.txt", "1.0 1e300 0.1\n", "vp/controls.txt:1", "speed 1e+300 m/s is beyond 10^3 m/s");
   expectDataError("tree_observations_associated_UTS.txt", "1.0 -1 1.0 3 0 0\n",
                   "tree_observations_associated_UTS.txt:1", "range");
   expectDataError("tree_observations_associated_UTS.txt", "1.0 4 3.5 3 0 0\n",

@@ -3,6 +3,7 @@
 // names the failure, and the error is still reported (seif run: exit 2, one line). What an
 // earlier run wrote into the folder never outlives a later one.
 #include "cli_support.hpp"
+#include "scenario.hpp"
 
 #include <seif/association/association.hpp>
 #include <seif/core/errors.hpp>
@@ -25,37 +26,42 @@
 namespace fs = std::filesystem;
 using seif::test::runCli;
 using seif::test::scratchDir;
+using seif::test::writePaperWorld;
 using seif::test::slurp;
 
 namespace {
 
-/// The paper's world over `steps` steps as an MRCLAM folder; with `bad_line` > 0, that data
-/// line of the odometry (1-based, after the comment lines) drives at 1e300 m/s.
-fs::path writeWorld(const fs::path& dir, int steps, int bad_line = 0) {
-  const fs::path data = dir / "data";
-  seif::writeMrclam(data, seif::simulate(seif::presetConfig(seif::WorldPreset::Paper, 50, steps, 3)));
-  if (bad_line > 0) {
-    std::istringstream in(slurp(data / "Robot1_Odometry.dat"));
-    std::string line, text;
-    int row = 0;
-    while (std::getline(in, line)) {
-      if (!line.empty() && line[0] != '#' && ++row == bad_line) {
-        const auto tab = line.find('\t');
-        line = line.substr(0, tab) + "\t1e300" + line.substr(line.find('\t', tab + 1));
-      }
-      text += line + "\n";
+/// Cuts a world's log at its `row`-th control (1-based, after the comment lines), which it
+/// stamps 1e306 s late at 10^3 m/s: the reader takes it (forward in time, a speed a vehicle
+/// may have), and that step's increment overflows. The steps before it are the world's.
+void overflowControl(const fs::path& data, int row) {
+  double cut = 0.0;
+  auto rewrite = [&](const char* name, auto&& edit) {
+    std::istringstream in(slurp(data / name));
+    std::string text;
+    int n = 0;
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#' || edit(++n, line)) text += line + "\n";
     }
-    std::ofstream(data / "Robot1_Odometry.dat") << text;
-  }
-  return data;
+    std::ofstream(data / name) << text;
+  };
+  rewrite("Robot1_Odometry.dat", [&](int n, std::string& line) {
+    if (n == row) {
+      cut = std::stod(line);
+      line = "1e306\t1000" + line.substr(line.find('\t', line.find('\t') + 1));
+    }
+    return n <= row;
+  });
+  rewrite("Robot1_Measurement.dat", [&](int, const std::string& line) { return std::stod(line) < cut; });
 }
 
 }  // namespace
 
 TEST(RunFailure, AStepThatFailsEndsTheRunWithTheOutputsOfTheStepsBeforeIt) {
   const auto dir = scratchDir("run-failure");
-  const fs::path good = writeWorld(dir / "good", 200);
-  const fs::path bad = writeWorld(dir / "bad", 200, 120);
+  const fs::path good = writePaperWorld(dir / "good", 200);
+  const fs::path bad = writePaperWorld(dir / "bad", 200);
+  overflowControl(bad, 120);
   for (const char* filter : {"seif", "ekf"}) {
     SCOPED_TRACE(filter);
     seif::RunRequest request;
@@ -97,7 +103,7 @@ TEST(RunFailure, AStepThatFailsEndsTheRunWithTheOutputsOfTheStepsBeforeIt) {
 
 TEST(RunFailure, BadDataFurtherInTheStreamKeepsTheStepsBeforeItAndASmootherWritesNothing) {
   const auto dir = scratchDir("run-failure-data");
-  const fs::path data = writeWorld(dir, 200);
+  const fs::path data = writePaperWorld(dir, 200);
   {  // a letter in the 150th odometry row
     std::istringstream in(slurp(data / "Robot1_Odometry.dat"));
     std::string line, text;
@@ -135,7 +141,7 @@ TEST(RunFailure, BadDataFurtherInTheStreamKeepsTheStepsBeforeItAndASmootherWrite
 
 TEST(RunFailure, WhatAnEarlierRunWroteIsRemovedFirst) {
   const auto dir = scratchDir("run-stale");
-  const fs::path data = writeWorld(dir, 50);
+  const fs::path data = writePaperWorld(dir, 50);
   const fs::path out = dir / "out";
   fs::create_directories(out);
   for (const char* stale : {"map_filter.csv", "trajectory_filter.tum", "gps.csv", "trajectory_cov.csv", "map.png"}) {
@@ -155,7 +161,7 @@ TEST(RunFailure, WhatAnEarlierRunWroteIsRemovedFirst) {
 
 TEST(RunFailure, AResumedRunRefusesAnotherFilterAndSmoothing) {
   const auto dir = scratchDir("run-resume-conflicts");
-  const fs::path data = writeWorld(dir, 60);
+  const fs::path data = writePaperWorld(dir, 60);
   seif::RunRequest request;
   request.dataset = data;
   request.filter = "seif:active=4";

@@ -2,6 +2,7 @@
 // for the steps it ran, says so in metrics.json, saves a checkpoint when given a file, and that
 // checkpoint resumes to the outputs of the run never stopped.
 #include "cli_support.hpp"
+#include "scenario.hpp"
 
 #include <seif/core/errors.hpp>
 #include <seif/eval/run_dataset.hpp>
@@ -19,6 +20,7 @@
 namespace fs = std::filesystem;
 using seif::test::runCli;
 using seif::test::scratchDir;
+using seif::test::writePaperWorld;
 using seif::test::estimateMetrics;
 using seif::test::slurp;
 
@@ -32,16 +34,9 @@ void expectSameOutputs(const fs::path& a, const fs::path& b) {
   EXPECT_EQ(estimateMetrics(a), estimateMetrics(b));
 }
 
-/// The paper's world over `steps` steps, written as an MRCLAM folder.
-fs::path writeWorld(const fs::path& dir, int steps) {
-  const fs::path data = dir / "data";
-  seif::writeMrclam(data, seif::simulate(seif::presetConfig(seif::WorldPreset::Paper, 50, steps, 3)));
-  return data;
-}
-
 TEST(RunStop, AStoppedRunWritesWhatItRanAndItsCheckpointResumesToTheWholeRun) {
   const auto dir = scratchDir("run-stop");
-  const fs::path data = writeWorld(dir, 3000);  // progress is reported every 1024 steps
+  const fs::path data = writePaperWorld(dir, 3000);  // progress is reported every 1024 steps
   for (const char* filter : {"seif", "ekf"}) {
     SCOPED_TRACE(filter);
     seif::RunRequest request;
@@ -146,7 +141,7 @@ TEST(RunStop, AnAssociatingRunStoppedAndResumedEqualsTheWholeRun) {
 TEST(RunStop, AResumedRunReadsItsDatasetWithTheSameOptions) {
   const auto dir = scratchDir("run-stop-options");
   seif::RunRequest request;
-  request.dataset = writeWorld(dir, 2000);
+  request.dataset = writePaperWorld(dir, 2000);
   std::atomic<bool> stop{false};
   request.stop = &stop;
   request.checkpoint = dir / "run.ckpt";
@@ -176,7 +171,7 @@ TEST(RunStop, AResumedRunReadsItsDatasetWithTheSameOptions) {
 TEST(RunStop, AStopBeforeTheFirstStepIsInterruptedAndWritesNothing) {
   const auto dir = scratchDir("run-stop-first");
   seif::RunRequest request;
-  request.dataset = writeWorld(dir, 50);
+  request.dataset = writePaperWorld(dir, 50);
   std::atomic<bool> stop{true};
   request.stop = &stop;
   const fs::path out = dir / "out";
@@ -188,7 +183,7 @@ TEST(RunStop, AStopBeforeTheFirstStepIsInterruptedAndWritesNothing) {
 TEST(RunStop, ACheckpointFileWithoutAPeriodIsWrittenOnlyWhenTheRunStops) {
   const auto dir = scratchDir("run-stop-period");
   seif::RunRequest request;
-  request.dataset = writeWorld(dir, 200);
+  request.dataset = writePaperWorld(dir, 200);
   request.checkpoint = dir / "run.ckpt";
   const fs::path out = dir / "out";
   fs::create_directories(out);

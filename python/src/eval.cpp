@@ -163,8 +163,8 @@ void bindRun(py::module_& m) {
   m.def(
       "run_dataset",
       [](RunRequest request, const std::filesystem::path& out, const py::object& progress) {
-        // Ctrl-C: Python's C handler only flags the signal; the flag is read here between
-        // steps (or KeyboardInterrupt comes out of the progress callback). The run then stops
+        // Ctrl-C: Python's C handler only flags the signal; the flag is read here at each
+        // progress report (or KeyboardInterrupt comes out of the progress callback). The run then stops
         // whole - outputs and any checkpoint written - and KeyboardInterrupt is raised after.
         std::atomic<bool> stop{false};
         std::optional<py::error_already_set> interrupt;
@@ -202,7 +202,7 @@ void bindRun(py::module_& m) {
       "`seif run` as one call: writes trajectory.tum, dead_reckoning.tum, map.csv, metrics.json into "
       "out_dir (which must exist) and returns a RunReport. progress(fraction) is called during the run. "
       "Raises DataError, NumericError, InvalidArgument; a failure after the first step raises once the "
-      "outputs of the steps before it are written (metrics.json \"failure\"). Ctrl-C stops the run after the step it is in: the "
+      "outputs of the steps before it are written (metrics.json \"failure\"). Ctrl-C (read at each progress report, every 1024 steps) stops the run: the "
       "outputs so far are written (metrics.json \"interrupted\": true; with request.checkpoint a checkpoint "
       "to resume from), then KeyboardInterrupt is raised.");
 

@@ -206,6 +206,31 @@ def _ctrl_c_at_report(n):
     return callback
 
 
+def test_sigterm_stops_a_run_whole_once_the_application_maps_it_to_keyboard_interrupt(tmp_path):
+    """Python kills a process on SIGTERM by default; an application that wants `seif run`'s
+    behaviour (stop, write the outputs) installs signal.default_int_handler for it."""
+    folder = tmp_path / "data"
+    seif.write_mrclam(folder, seif.simulate(seif.preset_config("paper", 0, 3000, 3)))
+    reports = []
+
+    def sigterm_at_the_second_report(fraction):
+        reports.append(fraction)
+        if len(reports) == 2:
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    out = tmp_path / "out"
+    out.mkdir()
+    previous = signal.signal(signal.SIGTERM, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            seif.run_dataset(seif.RunRequest(str(folder), "seif"), str(out), sigterm_at_the_second_report)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["interrupted"] is True
+    assert metrics["steps"] == 1025
+
+
 def test_keyboard_interrupt_stops_a_run_whole_and_its_checkpoint_resumes(tmp_path):
     """Ctrl-C during run_dataset: the run stops after the step it is in, writes its outputs and
     the checkpoint, then KeyboardInterrupt is raised; the checkpoint resumes to the whole run."""

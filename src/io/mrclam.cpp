@@ -155,6 +155,8 @@ OdometryRecord odometryRow(TextTable& t, TimeOrder& order) {
   r.v = t.real(1);
   r.w = t.real(2);
   order.check(t, r.time);
+  if (std::abs(r.v) > kMaxSpeed) t.fail("speed " + formatDouble(r.v) + " m/s is beyond 10^3 m/s");
+  if (std::abs(r.w) > kMaxTurnRate) t.fail("turn rate " + formatDouble(r.w) + " rad/s is beyond 10^3 rad/s");
   return r;
 }
 

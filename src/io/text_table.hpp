@@ -28,6 +28,10 @@ namespace seif {
 /// The largest range a reader takes, in metres: beyond it a value is corrupt (its landmark
 /// would be placed, and its information computed, out of all proportion).
 inline constexpr double kMaxRange = 1e6;
+/// The largest speed [m/s] and turn rate [rad/s] a reader takes: no vehicle a landmark log
+/// comes from is faster; beyond them a control is corrupt, and the step it drives fails.
+inline constexpr double kMaxSpeed = 1e3;
+inline constexpr double kMaxTurnRate = 1e3;
 
 class TextTable {
  public:

@@ -154,6 +154,7 @@ class VictoriaParkSource final : public EventSource {
       const TextTable& r = *controls_.table;
       const double speed = r.real(1), steering = r.real(2);
       if (std::abs(steering) >= kPi / 2) r.fail("steering " + formatDouble(steering) + " is not in (-pi/2, pi/2)");
+      if (std::abs(speed) > kMaxSpeed) r.fail("speed " + formatDouble(speed) + " m/s is beyond 10^3 m/s");
       event = ControlEvent{t, AckermannControl{speed, steering, 0.0}};
       ++controls_read_;
       advance(controls_, {"time", "speed", "steering"});
