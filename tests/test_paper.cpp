@@ -15,6 +15,7 @@
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <utility>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -216,6 +217,27 @@ TEST(PaperStudy, RunPaperIsItsRunsWhateverTheThreadsAndWritesItsFiles) {
   request.runs = 2;
   request.seed = UINT64_MAX;
   EXPECT_THROW(seif::checkPaperRequest(request), seif::InvalidArgument);
+}
+
+// One run gives no confidence interval: its cells print the mean alone (the paper's column
+// keeps the paper's), where two runs print mean ± half-width.
+TEST(PaperStudy, OneRunPrintsNoInterval) {
+  auto intervals = [](int runs) {
+    seif::PaperRequest request;
+    request.runs = runs;
+    request.options.steps = 60;
+    const std::string text = seif::paperSummaryText(seif::runPaper(request));
+    const std::size_t from = text.find("SEIF (constant time)");
+    const std::string row = text.substr(from, text.find('\n', from) - from);
+    std::size_t n = 0;
+    for (std::size_t at = row.find("±"); at != std::string::npos; at = row.find("±", at + 1)) ++n;
+    return std::pair{n, row};
+  };
+  const auto [one, row1] = intervals(1);
+  EXPECT_EQ(one, 2u) << row1;  // the paper's error and links only
+  EXPECT_NE(row1.find("6.35 ± 0.67"), std::string::npos) << row1;
+  const auto [two, row2] = intervals(2);
+  EXPECT_EQ(two, 5u) << row2;  // with the run's error, ratio and links
 }
 
 TEST(PaperExperiment, SnapshotOrdersByIdAndListsLinks) {

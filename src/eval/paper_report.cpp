@@ -55,8 +55,13 @@ std::string fmt(const char* format, double v) {
   return buf;
 }
 
-std::string plusMinus(double mean, double ci, const char* format) {
-  return fmt(format, mean) + " ± " + fmt(format, ci);
+/// " ± ci", or nothing from fewer than two runs (no interval: ci95HalfWidth's 0 is not one).
+std::string interval(double ci, const char* format, std::size_t runs) {
+  return runs >= 2 ? " ± " + fmt(format, ci) : std::string();
+}
+
+std::string plusMinus(double mean, double ci, const char* format, std::size_t runs) {
+  return fmt(format, mean) + interval(ci, format, runs);
 }
 
 /// A table kept as strings, printed aligned for the terminal and as Markdown.
@@ -204,11 +209,11 @@ void fillTables(const PaperReport& report, PaperTables& t) {
     t.table.rows.push_back({
         ref.label,
         std::to_string(s.error.n),
-        plusMinus(1e3 * s.error.mean, 1e3 * s.error.ci95, "%.2f"),
-        plusMinus(1e3 * ref.error, 1e3 * ref.error_ci95, "%.2f"),
-        f == 0 ? std::string("1") : plusMinus(s.ratio, s.ratio_ci95, "%.3f"),
+        plusMinus(1e3 * s.error.mean, 1e3 * s.error.ci95, "%.2f", s.error.n),
+        plusMinus(1e3 * ref.error, 1e3 * ref.error_ci95, "%.2f", 2),
+        f == 0 ? std::string("1") : plusMinus(s.ratio, s.ratio_ci95, "%.3f", s.error.n),
         fmt("%.3f", ref.error / 5.54e-3),
-        plusMinus(s.link.mean, s.link.ci95, "%.1f"),
+        plusMinus(s.link.mean, s.link.ci95, "%.1f", s.link.n),
         ref.links_ci95 > 0 ? fmt("%.0f", ref.links) + " ± " + fmt("%.2f", ref.links_ci95)
                            : fmt("%.0f", ref.links),
         fmt("%.1f", s.us_median),
@@ -225,29 +230,30 @@ void fillTables(const PaperReport& report, PaperTables& t) {
            "magnitude of its table. Same data for all filters in a run.\n";
   t.notes << "RMS landmark error [m] (sqrt of each run's value, averaged):";
   for (std::size_t f = 0; f < 3; ++f) {
-    t.notes << (f ? ", " : " ") << sums[f].name << " " << fmt("%.4f", sums[f].rms.mean) << " ± "
-          << fmt("%.4f", sums[f].rms.ci95);
+    t.notes << (f ? ", " : " ") << sums[f].name << " "
+            << plusMinus(sums[f].rms.mean, sums[f].rms.ci95, "%.4f", sums[f].rms.n);
   }
   t.notes << "\n";
   t.notes << "Aligned error (the map's shape error): the final error after the best rigid 2-D "
            "alignment of each map to the truth, i.e. with the whole map's offset and rotation "
            "removed [10^-3 m^2]:";
   for (std::size_t f = 0; f < 3; ++f) {
-    t.notes << (f ? ", " : " ") << sums[f].name << " " << fmt("%.3f", 1e3 * sums[f].aligned_error.mean)
-          << " ± " << fmt("%.3f", 1e3 * sums[f].aligned_error.ci95);
+    t.notes << (f ? ", " : " ") << sums[f].name << " "
+          << plusMinus(1e3 * sums[f].aligned_error.mean, 1e3 * sums[f].aligned_error.ci95, "%.3f",
+                       sums[f].aligned_error.n);
     if (f > 0) t.notes << " (" << fmt("%.2f", sums[f].aligned_ratio) << " × EKF)";
   }
   t.notes << "\n";
   t.notes << "Paired difference to the EKF, same runs [10^-3 m^2]:";
   for (std::size_t f = 1; f < 3; ++f) {
     t.notes << (f > 1 ? ", " : " ") << sums[f].name << " " << fmt("%+.3f", 1e3 * sums[f].diff.mean)
-          << " ± " << fmt("%.3f", 1e3 * sums[f].diff.ci95);
+          << interval(1e3 * sums[f].diff.ci95, "%.3f", sums[f].diff.n);
   }
   t.notes << "\n";
   t.notes << "Error / EKF with 95% CI (paired, delta method):";
   for (std::size_t f = 1; f < 3; ++f) {
-    t.notes << (f > 1 ? ", " : " ") << sums[f].name << " " << fmt("%.3f", sums[f].ratio) << " ± "
-          << fmt("%.3f", sums[f].ratio_ci95) << " (median of per-run ratios "
+    t.notes << (f > 1 ? ", " : " ") << sums[f].name << " "
+            << plusMinus(sums[f].ratio, sums[f].ratio_ci95, "%.3f", sums[f].error.n) << " (median of per-run ratios "
           << fmt("%.3f", sums[f].ratio_median) << ")";
   }
   t.notes << "\n";
@@ -285,10 +291,10 @@ void fillTables(const PaperReport& report, PaperTables& t) {
       const int active = options.sweep_active[k];
       const auto journal = journalErrorRatio(active);
       t.sweep.rows.push_back({std::to_string(active), std::to_string(s.error.n),
-                            plusMinus(1e3 * s.error.mean, 1e3 * s.error.ci95, "%.2f"),
-                            plusMinus(s.ratio, s.ratio_ci95, "%.3f"),
+                            plusMinus(1e3 * s.error.mean, 1e3 * s.error.ci95, "%.2f", s.error.n),
+                            plusMinus(s.ratio, s.ratio_ci95, "%.3f", s.error.n),
                             journal ? fmt("%.3f", *journal) : std::string("-"),
-                            plusMinus(s.link.mean, s.link.ci95, "%.1f"), fmt("%.1f", s.us_median),
+                            plusMinus(s.link.mean, s.link.ci95, "%.1f", s.link.n), fmt("%.1f", s.us_median),
                             fmt("%.3f", s.us_median / ekf.us_median)});
       t.sweep_json.push_back({{"active", active},
                             {"runs", s.error.n},
@@ -320,7 +326,7 @@ void fillTables(const PaperReport& report, PaperTables& t) {
     for (std::size_t f = 0; f < sums.size(); ++f) {
       if (f >= 3 && !report.specs[f].spec) continue;  // the sweep has its own table
       const PaperFilterSummary& s = sums[f];
-      std::vector<std::string> row = {s.name, plusMinus(1e3 * s.error.mean, 1e3 * s.error.ci95, "%.2f"),
+      std::vector<std::string> row = {s.name, plusMinus(1e3 * s.error.mean, 1e3 * s.error.ci95, "%.2f", s.error.n),
                                       fmt("%.3f", s.ratio), fmt("%.3f", s.aligned_ratio)};
       if (with_batch) {
         const PaperFilterSummary& b = sums[batch_index];
