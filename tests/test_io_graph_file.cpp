@@ -50,6 +50,8 @@ TEST(GraphFile, IsamEventsPoseTimesAndOwnNoise) {
   EXPECT_EQ(std::get<ControlEvent>(e[3]).time, 2.0);
   EXPECT_EQ(s->info().start_pose_id, 10);
   EXPECT_EQ(s->info().format, "isam");
+  ASSERT_EQ(s->info().noise.size(), 2u);  // each record carries its own: no one value
+  for (const NoiseSetting& n : s->info().noise) EXPECT_FALSE(n.value) << n.name;
 }
 
 TEST(GraphFile, G2oTakesItsStartPoseFromTheFirstVertexAndInvertsInformation) {

@@ -81,7 +81,7 @@ TEST(MrclamSource, ASimulatedFolderKeepsItsPerStepNoiseFromMetaJson) {
   auto d = openMrclam(dir, o);
   n.clear();
   for (const NoiseSetting& x : d->info().noise) n[x.name] = x;
-  EXPECT_NEAR(n["sigma_v"].value, 0.05 * std::sqrt(kMrclamOdometryPeriod), 1e-15);
+  EXPECT_NEAR(n["sigma_v"].value.value(), 0.05 * std::sqrt(kMrclamOdometryPeriod), 1e-15);
   EXPECT_EQ(n["sigma_v"].unit, "m/s*sqrt(s)");
   EXPECT_EQ(n["sigma_v"].source, "default for mrclam");
   EXPECT_EQ(n["sigma_range"].value, 0.5);

@@ -5,6 +5,7 @@
 #include <seif/sim/world.hpp>
 
 #include "json_fields.hpp"
+#include "text_format.hpp"
 
 #include <Eigen/Core>
 #include <csignal>
@@ -255,12 +256,6 @@ Repeated runRepeated(const BenchCase& c, int repeat, unsigned timeout_seconds) {
 
 // ---------------------------------------------------------------- skipping -------------
 
-std::string fmt(const char* format, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, v);
-  return buf;
-}
-
 /// The reason to skip a case, or nothing when its estimate is within the budget. The time
 /// budget is for all `runs` of the case.
 std::optional<std::string> skipReason(const std::string& filter, int n, const BenchEstimate& e, int runs,
@@ -281,16 +276,16 @@ std::optional<std::string> skipReason(const std::string& filter, int n, const Be
   std::string memory;
   if (e.matrix_bytes > 0.0) {
     const std::string dim = std::to_string(3 + 2 * static_cast<long long>(n));
-    memory = "3 x " + dim + "^2 doubles = " + fmt("%.2g", e.matrix_bytes / 1e9) + " GB";
+    memory = "3 x " + dim + "^2 doubles = " + formatted("%.2g", e.matrix_bytes / 1e9) + " GB";
   } else {
-    memory = "an estimated " + fmt("%.2g", gb) + " GB";
+    memory = "an estimated " + formatted("%.2g", gb) + " GB";
   }
-  memory += too_big ? " (budget " + fmt("%g", args.max_memory_gb) + " GB)" : "";
-  const std::string time = "~O(N^" + fmt("%.2g", e.exponent) + ") per step: estimated " +
-                           fmt("%.2g", e.seconds_per_step) + " s/step, " + fmt("%.2g", e.build_seconds) +
+  memory += too_big ? " (budget " + formatted("%g", args.max_memory_gb) + " GB)" : "";
+  const std::string time = "~O(N^" + formatted("%.2g", e.exponent) + ") per step: estimated " +
+                           formatted("%.2g", e.seconds_per_step) + " s/step, " + formatted("%.2g", e.build_seconds) +
                            " s to map them" +
                            (runs > 1 ? ", x" + std::to_string(runs) + " runs" : std::string()) +
-                           (too_slow ? " (budget " + fmt("%g", args.max_seconds) + " s)" : "");
+                           (too_slow ? " (budget " + formatted("%g", args.max_seconds) + " s)" : "");
   return what + " needs " + memory + " and " + time;
 }
 

@@ -4,6 +4,7 @@
 #include "core/files.hpp"
 
 #include "json_fields.hpp"
+#include "text_format.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -49,19 +50,13 @@ std::optional<double> journalErrorRatio(int active) {
   return std::nullopt;
 }
 
-std::string fmt(const char* format, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, v);
-  return buf;
-}
-
 /// " ± ci", or nothing from fewer than two runs (no interval: ci95HalfWidth's 0 is not one).
 std::string interval(double ci, const char* format, std::size_t runs) {
-  return runs >= 2 ? " ± " + fmt(format, ci) : std::string();
+  return runs >= 2 ? " ± " + formatted(format, ci) : std::string();
 }
 
 std::string plusMinus(double mean, double ci, const char* format, std::size_t runs) {
-  return fmt(format, mean) + interval(ci, format, runs);
+  return formatted(format, mean) + interval(ci, format, runs);
 }
 
 /// A table kept as strings, printed aligned for the terminal and as Markdown.
@@ -212,11 +207,11 @@ void fillTables(const PaperReport& report, PaperTables& t) {
         plusMinus(1e3 * s.error.mean, 1e3 * s.error.ci95, "%.2f", s.error.n),
         plusMinus(1e3 * ref.error, 1e3 * ref.error_ci95, "%.2f", 2),
         f == 0 ? std::string("1") : plusMinus(s.ratio, s.ratio_ci95, "%.3f", s.error.n),
-        fmt("%.3f", ref.error / 5.54e-3),
+        formatted("%.3f", ref.error / 5.54e-3),
         plusMinus(s.link.mean, s.link.ci95, "%.1f", s.link.n),
-        ref.links_ci95 > 0 ? fmt("%.0f", ref.links) + " ± " + fmt("%.2f", ref.links_ci95)
-                           : fmt("%.0f", ref.links),
-        fmt("%.1f", s.us_median),
+        ref.links_ci95 > 0 ? formatted("%.0f", ref.links) + " ± " + formatted("%.2f", ref.links_ci95)
+                           : formatted("%.0f", ref.links),
+        formatted("%.1f", s.us_median),
         std::string(ref.complexity_here) +
             (std::string(ref.complexity_here) != ref.complexity_paper
                  ? std::string(" (paper: ") + ref.complexity_paper + ")"
@@ -241,12 +236,12 @@ void fillTables(const PaperReport& report, PaperTables& t) {
     t.notes << (f ? ", " : " ") << sums[f].name << " "
           << plusMinus(1e3 * sums[f].aligned_error.mean, 1e3 * sums[f].aligned_error.ci95, "%.3f",
                        sums[f].aligned_error.n);
-    if (f > 0) t.notes << " (" << fmt("%.2f", sums[f].aligned_ratio) << " × EKF)";
+    if (f > 0) t.notes << " (" << formatted("%.2f", sums[f].aligned_ratio) << " × EKF)";
   }
   t.notes << "\n";
   t.notes << "Paired difference to the EKF, same runs [10^-3 m^2]:";
   for (std::size_t f = 1; f < 3; ++f) {
-    t.notes << (f > 1 ? ", " : " ") << sums[f].name << " " << fmt("%+.3f", 1e3 * sums[f].diff.mean)
+    t.notes << (f > 1 ? ", " : " ") << sums[f].name << " " << formatted("%+.3f", 1e3 * sums[f].diff.mean)
           << interval(1e3 * sums[f].diff.ci95, "%.3f", sums[f].diff.n);
   }
   t.notes << "\n";
@@ -254,30 +249,30 @@ void fillTables(const PaperReport& report, PaperTables& t) {
   for (std::size_t f = 1; f < 3; ++f) {
     t.notes << (f > 1 ? ", " : " ") << sums[f].name << " "
             << plusMinus(sums[f].ratio, sums[f].ratio_ci95, "%.3f", sums[f].error.n) << " (median of per-run ratios "
-          << fmt("%.3f", sums[f].ratio_median) << ")";
+          << formatted("%.3f", sums[f].ratio_median) << ")";
   }
   t.notes << "\n";
   t.notes << "Per-run error [10^-3 m^2] median / max:";
   for (std::size_t f = 0; f < 3; ++f) {
-    t.notes << (f ? ", " : " ") << sums[f].name << " " << fmt("%.2f", 1e3 * sums[f].error.median)
-          << " / " << fmt("%.2f", 1e3 * sums[f].error.max);
+    t.notes << (f ? ", " : " ") << sums[f].name << " " << formatted("%.2f", 1e3 * sums[f].error.median)
+          << " / " << formatted("%.2f", 1e3 * sums[f].error.max);
   }
   t.notes << "\n";
-  t.notes << "Mapped landmarks: " << fmt("%.2f", ekf.map.mean) << " of " << N << " on average (min "
-        << fmt("%.0f", ekf.map.min) << "); " << t.all_mapped << " of " << n_runs << " runs mapped all "
+  t.notes << "Mapped landmarks: " << formatted("%.2f", ekf.map.mean) << " of " << N << " on average (min "
+        << formatted("%.0f", ekf.map.min) << "); " << t.all_mapped << " of " << n_runs << " runs mapped all "
         << N << ".\n";
   t.notes << "EKF links = n(n+1)/2 for its n mapped landmarks in " << t.ekf_dense << " of " << n_runs
         << " runs; in the " << t.all_mapped << " runs with all " << N << " mapped: ";
   if (t.all_mapped > 0) {
     t.notes << (t.ekf_links_all_min == t.ekf_links_all_max
-                  ? fmt("%.0f", t.ekf_links_all_min)
-                  : fmt("%.0f", t.ekf_links_all_min) + ".." + fmt("%.0f", t.ekf_links_all_max))
+                  ? formatted("%.0f", t.ekf_links_all_min)
+                  : formatted("%.0f", t.ekf_links_all_min) + ".." + formatted("%.0f", t.ekf_links_all_max))
           << " (paper: 1275).\n";
   } else {
     t.notes << "none.\n";
   }
-  t.notes << "SEIF links / EKF links: exact " << fmt("%.3f", sums[1].link.mean / ekf.link.mean)
-        << ", constant time " << fmt("%.3f", sums[2].link.mean / ekf.link.mean)
+  t.notes << "SEIF links / EKF links: exact " << formatted("%.3f", sums[1].link.mean / ekf.link.mean)
+        << ", constant time " << formatted("%.3f", sums[2].link.mean / ekf.link.mean)
         << " (paper: 549 / 1275 = 0.431).\n";
   t.notes << "Time per update: " << kTimeDefinition << "; measured with " << jobs
         << " runs in parallel.\n";
@@ -293,9 +288,9 @@ void fillTables(const PaperReport& report, PaperTables& t) {
       t.sweep.rows.push_back({std::to_string(active), std::to_string(s.error.n),
                             plusMinus(1e3 * s.error.mean, 1e3 * s.error.ci95, "%.2f", s.error.n),
                             plusMinus(s.ratio, s.ratio_ci95, "%.3f", s.error.n),
-                            journal ? fmt("%.3f", *journal) : std::string("-"),
-                            plusMinus(s.link.mean, s.link.ci95, "%.1f", s.link.n), fmt("%.1f", s.us_median),
-                            fmt("%.3f", s.us_median / ekf.us_median)});
+                            journal ? formatted("%.3f", *journal) : std::string("-"),
+                            plusMinus(s.link.mean, s.link.ci95, "%.1f", s.link.n), formatted("%.1f", s.us_median),
+                            formatted("%.3f", s.us_median / ekf.us_median)});
       t.sweep_json.push_back({{"active", active},
                             {"runs", s.error.n},
                             {"error_mean", s.error.mean},
@@ -327,15 +322,15 @@ void fillTables(const PaperReport& report, PaperTables& t) {
       if (f >= 3 && !report.specs[f].spec) continue;  // the sweep has its own table
       const PaperFilterSummary& s = sums[f];
       std::vector<std::string> row = {s.name, plusMinus(1e3 * s.error.mean, 1e3 * s.error.ci95, "%.2f", s.error.n),
-                                      fmt("%.3f", s.ratio), fmt("%.3f", s.aligned_ratio)};
+                                      formatted("%.3f", s.ratio), formatted("%.3f", s.aligned_ratio)};
       if (with_batch) {
         const PaperFilterSummary& b = sums[batch_index];
-        row.push_back(fmt("%.2f", s.error.mean / b.error.mean));
-        row.push_back(fmt("%.2f", s.aligned_error.mean / b.aligned_error.mean));
+        row.push_back(formatted("%.2f", s.error.mean / b.error.mean));
+        row.push_back(formatted("%.2f", s.aligned_error.mean / b.aligned_error.mean));
       }
-      row.push_back(fmt("%.1f", s.nees.mean) + " (" + fmt("%.1f", s.nees.median) + ")");
-      row.push_back(fmt("%.1f", s.nees_pose.mean) + " (" + fmt("%.1f", s.nees_pose.median) + ")");
-      row.push_back(fmt("%.1f", s.us_median));
+      row.push_back(formatted("%.1f", s.nees.mean) + " (" + formatted("%.1f", s.nees.median) + ")");
+      row.push_back(formatted("%.1f", s.nees_pose.mean) + " (" + formatted("%.1f", s.nees_pose.median) + ")");
+      row.push_back(formatted("%.1f", s.us_median));
       t.beyond.rows.push_back(std::move(row));
     }
   }

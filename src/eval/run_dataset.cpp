@@ -90,7 +90,8 @@ std::string metricsJson(const RunRequest& request, const RunReport& r) {
   std::sort(sorted.begin(), sorted.end());
   nlohmann::json noise = nlohmann::json::array();
   for (const NoiseSetting& n : r.info.noise) {
-    noise.push_back({{"name", n.name}, {"value", n.value}, {"unit", n.unit}, {"source", n.source}});
+    noise.push_back({{"name", n.name}, {"value", n.value ? nlohmann::json(*n.value) : nlohmann::json()}, {"unit", n.unit},
+                     {"source", n.source}});
   }
   nlohmann::json dropped = nlohmann::json::object();
   for (const auto& [reason, count] : out.dropped) dropped[reason] = count;

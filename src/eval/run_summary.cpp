@@ -26,7 +26,8 @@ std::string runSummary(const RunRequest& request, const RunReport& r, const std:
                 out.steps == 0 ? 0.0 : 1e6 * out.seconds / static_cast<double>(out.steps));
   appendf(text, "  motion: %s\n  sensor: %s\n", r.info.motion->describe().c_str(), r.info.sensor->describe().c_str());
   for (const NoiseSetting& n : r.info.noise) {
-    appendf(text, "  noise %-15s %-10g %-14s (%s)\n", n.name.c_str(), n.value, n.unit.c_str(), n.source.c_str());
+    const std::string value = n.value ? formatted("%g", *n.value) : "per record";
+    appendf(text, "  noise %-15s %-10s %-14s (%s)\n", n.name.c_str(), value.c_str(), n.unit.c_str(), n.source.c_str());
   }
   appendf(text, "  start pose (%.3f, %.3f, %.3f): %s\n", r.info.start_pose.x(), r.info.start_pose.y(),
                 r.info.start_pose.z(), r.info.start_pose_source.c_str());

@@ -14,7 +14,7 @@ namespace seif {
 namespace {
 
 [[noreturn]] void notPositive(const SeifStore& store, const char* what) {
-  throw NumericError("seif: at step " + std::to_string(store.step()) + ": " + what +
+  throw NumericError("seif: after " + std::to_string(store.step()) + " motion updates: " + what +
                      " is not positive definite (conservative covariance)");
 }
 

@@ -433,7 +433,7 @@ const SparseMarginals& SeifSlam::factor() const {
     try {
       factor_ = std::make_unique<SparseMarginals>(store_.lowerInformation());
     } catch (const NumericError& e) {
-      throw NumericError("seif: at step " + std::to_string(store_.step()) + ": " + e.what());
+      throw NumericError("seif: after " + std::to_string(store_.step()) + " motion updates: " + e.what());
     }
   }
   return *factor_;

@@ -33,8 +33,8 @@ std::string shortNumber(double v) {
 /// active landmarks), kappa grows without limit: every later step's information outweighs
 /// the old by kappa, and H loses the start prior that fixes the global frame.
 [[noreturn]] void rethrowLost(const NumericError& e, long step, double kappa) {
-  throw NumericError("seif: conservative sparsification at step " + std::to_string(step) +
-                     " (information scaled down " + shortNumber(kappa) + " times so far): " + e.what() +
+  throw NumericError("seif: conservative sparsification after " + std::to_string(step) +
+                     " motion updates (information scaled down " + shortNumber(kappa) + " times so far): " + e.what() +
                      "; the paper's rule claimed too much to keep: more active landmarks, or "
                      "linearization=invariant (docs/consistency.md)");
 }
@@ -63,8 +63,8 @@ void SeifSlam::endConservativeSparsification() {
     rethrowLost(e, store_.step(), information_scale_);
   }
   if (!(c < 1e12)) {  // also NaN
-    throw NumericError("seif: conservative sparsification at step " + std::to_string(store_.step()) +
-                       ": the rule claims " + shortNumber(c) + " times the information the block held");
+    throw NumericError("seif: conservative sparsification after " + std::to_string(store_.step()) +
+                       " motion updates: the rule claims " + shortNumber(c) + " times the information the block held");
   }
   if (c > 0.0) {
     information_scale_ *= 1.0 + c;  // H / kappa <- H / (kappa (1 + c))

@@ -689,8 +689,8 @@ void SeifStore::relaxRobot() {
   for (const RobotLink& l : robot_links_) rhs.noalias() -= l.H * mean(l.slot);
   Eigen::LLT<Mat3> llt(H_xx_);
   if (llt.info() != Eigen::Success) {
-    throw NumericError("seif: robot information block is not positive definite at step " +
-                       std::to_string(step_));
+    throw NumericError("seif: robot information block is not positive definite after " +
+                       std::to_string(step_) + " motion updates");
   }
   mu_x_ = llt.solve(rhs);
   blocks_touched_ += 1 + robot_links_.size();
@@ -714,7 +714,7 @@ void SeifStore::relaxLandmark(int slot, double omega) {
   if (llt.info() != Eigen::Success) {
     std::ostringstream msg;
     msg << "seif: information of landmark " << ids_[static_cast<std::size_t>(slot)]
-        << " is not positive definite at step " << step_;
+        << " is not positive definite after " << step_ << " motion updates";
     throw NumericError(msg.str());
   }
   if (omega == 1.0) {
@@ -778,7 +778,7 @@ void SeifStore::solveLocalMean(Passive passive) {
   }
   if (!ok) {
     throw NumericError("seif: the information of the robot and its active landmarks is not "
-                       "positive definite at step " + std::to_string(step_));
+                       "positive definite after " + std::to_string(step_) + " motion updates");
   }
   mu_x_ = local_mu_.head<3>();
   for (std::size_t i = 0; i < gathered_.size(); ++i) {

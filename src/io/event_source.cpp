@@ -57,23 +57,24 @@ void checkNoiseNames(const DatasetOptions& options, const std::vector<std::strin
 double resolveNoise(DatasetInfo& info, const DatasetOptions& options, const std::string& name,
                     const std::string& unit, std::optional<double> from_file, const std::string& file_source,
                     double default_value) {
-  NoiseSetting s{name, default_value, unit, "default for " + info.format};
+  double value = default_value;
+  std::string source = "default for " + info.format;
   if (const auto it = options.noise.find(name); it != options.noise.end()) {
-    s.value = it->second;
-    s.source = "command line";
+    value = it->second;
+    source = "command line";
   } else if (from_file) {
-    s.value = *from_file;
-    s.source = file_source;
+    value = *from_file;
+    source = file_source;
   }
   // Bounded so that the variance and the information it gives are finite and not zero.
-  if (!std::isfinite(s.value) || !(s.value > 0.0) || s.value < 1e-100 || s.value > 1e100) {
+  if (!std::isfinite(value) || !(value > 0.0) || value < 1e-100 || value > 1e100) {
     std::ostringstream msg;
-    msg << name << (std::isfinite(s.value) && s.value > 0.0 ? " must be in [1e-100, 1e100]" : " must be finite and > 0")
-        << ", found " << s.value << " (" << s.source << ")";
+    msg << name << (std::isfinite(value) && value > 0.0 ? " must be in [1e-100, 1e100]" : " must be finite and > 0")
+        << ", found " << value << " (" << source << ")";
     throw InvalidArgument(msg.str());
   }
-  info.noise.push_back(s);
-  return s.value;
+  info.noise.push_back({name, value, unit, source});
+  return value;
 }
 
 }  // namespace seif

@@ -84,8 +84,8 @@ class GraphSource final : public EventSource {
     info_.format = name;
     info_.motion = std::make_shared<OdometryModel>();
     info_.start_pose_source = "origin: the chain's first pose (the file gives no absolute pose)";
-    info_.noise.push_back({"odometry covariance", 0.0, "", "each record (file)"});
-    info_.noise.push_back({"landmark covariance", 0.0, "", "each record (file)"});
+    info_.noise.push_back({"odometry covariance", std::nullopt, "", "each record (file)"});
+    info_.noise.push_back({"landmark covariance", std::nullopt, "", "each record (file)"});
     scan(peek);
   }
 

@@ -24,7 +24,7 @@ namespace seif {
 /// "command line", "default for <format>").
 struct NoiseSetting {
   std::string name;   ///< e.g. "sigma_v"
-  double value = 0.0;
+  std::optional<double> value;  ///< none where each record carries its own (graph files)
   std::string unit;   ///< e.g. "m/s*sqrt(s)"
   std::string source;
 };
