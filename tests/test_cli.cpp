@@ -247,7 +247,7 @@ const std::vector<BadInput> kBadInputs = {
     {"run_seed_negative", kRun + "--seed -1", 1, "--seed: " + kSeed + "-1"},
     {"paper_seed_negative", kPaper + "--seed -3", 1, "--seed: " + kSeed + "-3"},
     {"paper_seeds_past_2_64", "paper --runs 2 --no-figures --out {out} --seed 18446744073709551615", 1,
-     "--seed + --runs - 1 must be at most 18446744073709551615"},
+     "seed + runs - 1 (--seed, --runs) must be at most 18446744073709551615"},
     {"bench_seed_negative", kBench + "--seed -1", 1, "--seed: " + kSeed + "-1"},
     {"bench_world_seed_negative", kBench + "--world-seed -1", 1, "--world-seed: " + kSeed + "-1"},
     // --relax: an int >= 0.

@@ -337,7 +337,7 @@ Associator::Associator(const AssociationOptions& options) : impl_(std::make_uniq
   // Seen once a scan at most, a landmark born at scan b has its confirm-th sighting at scan
   // b + confirm - 1 at the earliest, and expires after scan b + window.
   if (o.method != AssociationMethod::Known && o.confirm > 1 && o.window < o.confirm - 1) {
-    throw InvalidArgument("association: --window " + std::to_string(o.window) + " can never confirm a landmark (--confirm " +
+    throw InvalidArgument("association: window " + std::to_string(o.window) + " (--window) can never confirm a landmark (confirm " +
                           std::to_string(o.confirm) + " needs a window of at least " + std::to_string(o.confirm - 1) +
                           " scans)");
   }

@@ -28,7 +28,7 @@ void checkPaperRequest(const PaperRequest& request) {
   if (o.relax < 0) throw InvalidArgument("paper: relax must be >= 0, found " + std::to_string(o.relax));
   // Run r uses seed SEED + r: the last one must not wrap past 2^64 - 1.
   if (request.seed > UINT64_MAX - static_cast<std::uint64_t>(request.runs - 1)) {
-    throw InvalidArgument("--seed + --runs - 1 must be at most " + std::to_string(UINT64_MAX) + ", found " +
+    throw InvalidArgument("paper: seed + runs - 1 (--seed, --runs) must be at most " + std::to_string(UINT64_MAX) + ", found " +
                                 std::to_string(request.seed) + " + " + std::to_string(request.runs) + " - 1");
   }
 }

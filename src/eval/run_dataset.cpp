@@ -404,8 +404,9 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   // The raw detections carry no landmark id: known association would fail at the first one.
   if (request.dataset_options.detections == Detections::Raw && request.resume.empty() &&
       request.association.method == AssociationMethod::Known && !request.association.drop_unlabelled) {
-    throw InvalidArgument("--detections raw: the detections carry no landmark id; associate them (--association nn "
-                          "or jcbb), or drop them with known association (--drop-unlabelled)");
+    throw InvalidArgument("raw detections (--detections raw) carry no landmark id: associate them (association "
+                          "nn or jcbb: --association), or drop them with known association (drop_unlabelled: "
+                          "--drop-unlabelled)");
   }
   RunCheckpointing checkpointing;
   checkpointing.every = request.checkpoint_every;
@@ -445,7 +446,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
                               " (give it, or no filter or filter options: a resumed run continues the checkpoint's filter)");
       }
     }
-    if (request.smooth) throw InvalidArgument("resume: a run resumed from a checkpoint cannot be smoothed (--smooth)");
+    if (request.smooth) throw InvalidArgument("resume: a run resumed from a checkpoint cannot be smoothed (smooth, --smooth)");
     checkpointing.values["filter"] = extras.values["filter"];
     if (const auto ran = extras.values.find("filter-spec"); ran != extras.values.end()) {
       checkpointing.values["filter-spec"] = ran->second;
@@ -456,7 +457,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   } else {
     const FilterSpec spec = requestedSpec(request, request.filter);
     if (!request.checkpoint.empty() && (request.smooth || spec.name == "batch")) {
-      throw InvalidArgument("checkpoints: the batch MAP (and --smooth) keeps every measurement and has no checkpoint");
+      throw InvalidArgument("checkpoints: the batch MAP (and smooth, --smooth) keeps every measurement and has no checkpoint");
     }
     filter = request.smooth ? makeSmoother(spec, source->info().start_pose, config, request.batch)
                             : makeFilter(spec, source->info().start_pose, config);

@@ -319,7 +319,7 @@ std::unique_ptr<SlamFilter> makeFilter(const FilterSpec& spec, const Pose2& star
 
 std::unique_ptr<SlamFilter> makeSmoother(const FilterSpec& filter, const Pose2& start, const FilterConfig& config,
                                          const BatchOptions& options) {
-  if (filter.name == "batch") throw InvalidArgument("--smooth: the batch is a smoother already; smooth after ekf, eif or seif");
+  if (filter.name == "batch") throw InvalidArgument("smooth (--smooth): the batch is a smoother already; smooth after ekf, eif or seif");
   FilterConfig inner = config;
   inner.outlier_gate = std::numeric_limits<double>::infinity();  // the smoother gates at its estimate
   return std::make_unique<BatchMap>(start, config, makeFilter(filter, start, inner), options);
