@@ -63,6 +63,11 @@ TEST(CliDatasets, IsamGraphWithEveryFilterAndThroughG2o) {
     EXPECT_EQ(lines(dir / f / "trajectory.tum"), 6969u) << f;
     EXPECT_EQ(lines(dir / f / "trajectory_cov.csv"), 6970u) << f;  // header + one row per pose
     EXPECT_EQ(lines(dir / f / "map.csv"), 152u) << f;  // header + 151 landmarks
+    // The noise is each record's: no one value.
+    EXPECT_NE(r.out.find("noise odometry covariance per record"), std::string::npos) << r.out;
+    for (const auto& n : nlohmann::json::parse(slurp(dir / f / "metrics.json")).at("noise")) {
+      EXPECT_TRUE(n.at("value").is_null()) << n;
+    }
   }
   ASSERT_EQ(runCli("convert " + isam + " --to g2o --out " + (dir / "vp.g2o").string()).status, 0);
   ASSERT_EQ(runCli("convert " + (dir / "vp.g2o").string() + " --to isam --out " + (dir / "vp.txt").string()).status, 0);

@@ -32,8 +32,9 @@ using seif::test::slurp;
 namespace {
 
 /// Cuts a world's log at its `row`-th control (1-based, after the comment lines), which it
-/// stamps 1e306 s late at 10^3 m/s: the reader takes it (forward in time, a speed a vehicle
-/// may have), and that step's increment overflows. The steps before it are the world's.
+/// stamps 1e306 s late (at 10^3 m/s, the largest speed a reader takes): the reader takes it,
+/// and the control before it, held over those 1e306 s, gives an increment that overflows.
+/// The steps before it are the world's.
 void overflowControl(const fs::path& data, int row) {
   double cut = 0.0;
   auto rewrite = [&](const char* name, auto&& edit) {

@@ -299,7 +299,7 @@ TEST(CliDetections, RawVictoriaParkReachesTheFilterWithoutLandmarkIds) {
   // Known association needs landmark ids: refused before the run, a usage error naming the cure.
   const auto r = test::runCli("run --dataset " + vp + " --detections raw --out " + dir.string());
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("no landmark id: associate them (association nn or jcbb: --association)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no landmark id: associate them (association.method nn or jcbb, --association)"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "metrics.json"));
   fs::remove_all(dir);
 }

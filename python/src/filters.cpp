@@ -519,7 +519,8 @@ void bindAssociation(py::module_& m) {
            "The filter refused the last associate()'s observations: forget what they counted (sightings, "
            "started landmarks, tallies) and go on")
       .def("finish", [](Associator& a, SlamFilter& filter) { a.finish(filter); }, py::arg("filter"),
-           "After the run: removes the landmarks still provisional and scores the association")
+           "After the run: removes the landmarks still provisional (a smoother keeps them) and scores the "
+           "association")
       .def("truth_of", &Associator::truthOf, py::arg("id"))
       .def_property_readonly("counts", &Associator::counts, py::return_value_policy::copy)
       .def_property_readonly("options", &Associator::options, py::return_value_policy::copy)

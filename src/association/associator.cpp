@@ -375,7 +375,8 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     for (std::size_t i = 0; i < observations.size(); ++i) {
       if (observations[i].landmark == kUnknownLandmark) {
         throw ModelError("association known: observation " + std::to_string(i) +
-                         " has no landmark id (choose --association nn or jcbb, or drop it: --drop-unlabelled)");
+                         " has no landmark id (choose association method nn or jcbb, --association, or drop "
+                         "it: drop_unlabelled, --drop-unlabelled)");
       }
     }
     return;

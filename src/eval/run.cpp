@@ -195,7 +195,9 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
   }
   if (associator) {
     try {
-      associator->finish(filter, stop);
+      // A run stopped part-way leaves its provisional landmarks in the map (their removal
+      // can be slow: docs/association.md); one that ran every step removes them.
+      associator->finish(filter, out.interrupted ? stop : nullptr);
     } catch (const Error&) {
       if (!out.failure) throw;  // else the run's own failure is the one reported
     }

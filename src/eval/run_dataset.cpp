@@ -404,9 +404,9 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
   // The raw detections carry no landmark id: known association would fail at the first one.
   if (request.dataset_options.detections == Detections::Raw && request.resume.empty() &&
       request.association.method == AssociationMethod::Known && !request.association.drop_unlabelled) {
-    throw InvalidArgument("raw detections (--detections raw) carry no landmark id: associate them (association "
-                          "nn or jcbb: --association), or drop them with known association (drop_unlabelled: "
-                          "--drop-unlabelled)");
+    throw InvalidArgument("raw detections (dataset_options.detections, --detections raw) carry no landmark id: "
+                          "associate them (association.method nn or jcbb, --association), or drop them with known "
+                          "association (association.drop_unlabelled, --drop-unlabelled)");
   }
   RunCheckpointing checkpointing;
   checkpointing.every = request.checkpoint_every;

@@ -7,7 +7,7 @@
 
 namespace seif {
 
-inline void vappendf(std::string& text, const char* format, std::va_list args) {
+[[gnu::format(printf, 2, 0)]] inline void vappendf(std::string& text, const char* format, std::va_list args) {
   std::va_list again;
   va_copy(again, args);
   const int n = std::vsnprintf(nullptr, 0, format, args);

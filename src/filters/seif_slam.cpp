@@ -501,7 +501,7 @@ Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars, bool conser
         if (v < 0) return store_.robotInformation();
         return store_.node(v).H;
       },
-      "seif (step " + std::to_string(store_.step()) + ")", static_cast<std::size_t>(options_.blanket),
+      "seif (after " + std::to_string(store_.step()) + " motion updates)", static_cast<std::size_t>(options_.blanket),
       conservative ? std::function<Eigen::MatrixXd(int)>([&](int v) -> Eigen::MatrixXd {
         if (v < 0) {  // seif_bounds.hpp
           BoundWorkspace ws;

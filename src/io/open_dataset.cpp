@@ -20,7 +20,7 @@ std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path, Data
       format = DatasetFormat::G2o;
     } else {
       throw DataError(path.string(), 0,
-                      "cannot tell the dataset's format; pass --format with one of: mrclam (a folder with "
+                      "cannot tell the dataset's format; give it (format, --format) as one of: mrclam (a folder with "
                       "Barcodes.dat and RobotN_Odometry.dat), victoria-park (a folder with controls.txt and "
                       "tree_observations_associated_UTS.txt or tree_detections.txt), isam (a text file of ODOMETRY / LANDMARK / BR "
                       "records), g2o (a text file of VERTEX_SE2 / VERTEX_XY / EDGE_SE2 / EDGE_SE2_XY records)");

@@ -176,8 +176,9 @@ class Associator {
   void discardScan();
   /// After the run: removes the landmarks still provisional (not from a smoother) and
   /// scores the association (landmarks_final, correct, spurious, duplicates, ...). Once
-  /// `stop` is set (an interrupted run) the removals stop: the landmarks left keep their
-  /// place in the map and are counted in provisional_final, as a smoother's are.
+  /// `stop` is set the removals stop: the landmarks left keep their place in the map and are
+  /// counted in provisional_final, as a smoother's are (runFilter passes its stop when the
+  /// run was stopped before its end).
   void finish(SlamFilter& filter, const std::atomic<bool>* stop = nullptr);
 
   const AssociationCounts& counts() const;
