@@ -170,8 +170,10 @@ void validate(const WorldConfig& c) {
   require(positive(c.sensor_range), got("sensor_range must be positive and finite", c.sensor_range));
   require(c.min_range >= 0.0 && c.min_range < c.sensor_range,
           got("min_range must be >= 0 and below sensor_range", c.min_range));
-  require(positive(c.dt), got("dt must be positive and finite", c.dt));
-  require(positive(c.speed), got("speed must be positive and finite", c.speed));
+  // The log's controls stay within what the readers take (|v| <= 10^3 m/s, |w| <= 10^3
+  // rad/s): v <= 2 speed and |w| dt <= 1 (kMaxSpeedFactor, kMaxTurnPerStep).
+  require(positive(c.dt) && c.dt >= 1e-3, got("dt must be finite and >= 1e-3 s", c.dt));
+  require(positive(c.speed) && c.speed <= 500.0, got("speed must be positive and at most 500 m/s", c.speed));
   require(positive(c.density), got("density must be positive and finite", c.density));
   require(positive(c.corridor_width),
           got("corridor_width must be positive and finite", c.corridor_width));
