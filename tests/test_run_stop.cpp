@@ -138,6 +138,51 @@ TEST(RunStop, AnAssociatingRunStoppedAndResumedEqualsTheWholeRun) {
   }
 }
 
+// A stop that comes after the last step, while the associator removes the provisional
+// landmarks left: they stay in the map, the run is interrupted there, and its checkpoint
+// finishes the removals when resumed.
+TEST(RunStop, AStopDuringTheFinalRemovalsIsAnInterruptionThatResumes) {
+  const auto dir = scratchDir("run-stop-final");
+  seif::WorldConfig world = seif::presetConfig(seif::WorldPreset::Park, 0, 1025, 2);
+  world.clutter = 1.0;
+  world.detection_probability = 0.9;
+  seif::RunRequest request;
+  request.dataset = dir / "data";
+  seif::writeMrclam(request.dataset, seif::simulate(world));
+  request.filter = "seif";
+  request.association.method = seif::AssociationMethod::NearestNeighbour;
+  request.association.marginal = seif::MarginalMode::Local;
+  const fs::path whole = dir / "whole";
+  fs::create_directories(whole);
+  const seif::RunReport full = seif::runDataset(request, whole);
+  ASSERT_EQ(full.output.steps, 1025u);
+  ASSERT_GT(full.association->provisional_removed, 0u);
+
+  std::atomic<bool> stop{false};
+  request.stop = &stop;
+  request.checkpoint = dir / "run.ckpt";
+  const fs::path part = dir / "part";
+  fs::create_directories(part);
+  int reports = 0;  // the second progress report comes after step 1024, the last
+  const seif::RunReport stopped = seif::runDataset(request, part, [&](double) {
+    if (++reports == 2) stop.store(true);
+  });
+  EXPECT_TRUE(stopped.output.interrupted);
+  EXPECT_EQ(stopped.output.steps, 1025u);
+  EXPECT_GT(stopped.association->provisional_final, 0u);
+  EXPECT_EQ(stopped.landmarks, full.landmarks + stopped.association->provisional_final);
+  EXPECT_TRUE(estimateMetrics(part).at("interrupted").get<bool>());
+
+  seif::RunRequest resume;
+  resume.dataset = request.dataset;
+  resume.resume = request.checkpoint;
+  const fs::path resumed = dir / "resumed";
+  fs::create_directories(resumed);
+  const seif::RunReport rest = seif::runDataset(resume, resumed);
+  EXPECT_FALSE(rest.output.interrupted);
+  expectSameOutputs(resumed, whole);
+}
+
 TEST(RunStop, AResumedRunReadsItsDatasetWithTheSameOptions) {
   const auto dir = scratchDir("run-stop-options");
   seif::RunRequest request;

@@ -185,8 +185,9 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
       associator->associate(f, k, z);
     };
   }
+  std::size_t consumed = options.start_step;  // the stream's steps behind the filter
   try {
-    runLoop(filter, source, steps, observers, options);
+    consumed += runLoop(filter, source, steps, observers, options);
   } catch (const Error&) {  // what ran before it is kept (RunOutput::failure)
     out.failure = std::current_exception();
     keepCompleteSteps(out, pose_covariances);
@@ -195,11 +196,18 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
   }
   if (associator) {
     try {
-      // A run stopped part-way leaves its provisional landmarks in the map (their removal
-      // can be slow: docs/association.md); one that ran every step removes them.
-      associator->finish(filter, out.interrupted ? stop : nullptr);
+      // A stopped run leaves its provisional landmarks in the map: their removal can be slow
+      // (docs/association.md).
+      associator->finish(filter, stop);
     } catch (const Error&) {
       if (!out.failure) throw;  // else the run's own failure is the one reported
+    }
+    // A stop after the last step, before or during those removals: the run is interrupted
+    // there, and its checkpoint (the state the removals stopped in) finishes them when resumed.
+    const bool kept = associator->counts().provisional_final > 0 && !filter.smoother();
+    if (!out.failure && !out.interrupted && kept && stop != nullptr && stop->load(std::memory_order_relaxed)) {
+      out.interrupted = true;
+      if (!checkpointing.path.empty()) checkpoints.onStop(filter, consumed);
     }
   }
   if (progress) progress(1.0);

@@ -177,8 +177,8 @@ class Associator {
   /// After the run: removes the landmarks still provisional (not from a smoother) and
   /// scores the association (landmarks_final, correct, spurious, duplicates, ...). Once
   /// `stop` is set the removals stop: the landmarks left keep their place in the map and are
-  /// counted in provisional_final, as a smoother's are (runFilter passes its stop when the
-  /// run was stopped before its end).
+  /// counted in provisional_final, as a smoother's are (runFilter passes its stop: a run
+  /// stopped then is interrupted, and its checkpoint finishes the removals).
   void finish(SlamFilter& filter, const std::atomic<bool>* stop = nullptr);
 
   const AssociationCounts& counts() const;
