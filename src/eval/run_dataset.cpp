@@ -26,7 +26,6 @@ using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 /// `filter` (a spec) with the request's flags as the defaults of the options it does not set.
-/// `filter` with the request's filter options (its flags) as defaults.
 FilterSpec flaggedSpec(const RunRequest& request, std::string_view filter) {
   FilterSpec defaults;
   defaults.linearization = request.linearization;
@@ -36,6 +35,7 @@ FilterSpec flaggedSpec(const RunRequest& request, std::string_view filter) {
   return parseFilterSpec(filter, defaults);
 }
 
+/// flaggedSpec(), with the covariance bounds the association's gate needs.
 FilterSpec requestedSpec(const RunRequest& request, std::string_view filter) {
   FilterSpec spec = flaggedSpec(request, filter);
   if (needsCovarianceBounds(request.association)) spec.seif.bounds = true;

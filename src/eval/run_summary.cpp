@@ -9,10 +9,7 @@ namespace seif {
 namespace {
 
 std::string metres(const std::optional<double>& v) {
-  if (!v) return "n/a";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4f", *v);
-  return buf;
+  return v ? formatted("%.4f", *v) : "n/a";
 }
 
 }  // namespace

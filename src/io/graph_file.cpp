@@ -190,9 +190,7 @@ class GraphSource final : public EventSource {
     Observation z;
     if (kind == Sensor::RangeBearing) {
       table_.expect({"BR", "pose", "landmark", "bearing", "range", "sigma_bearing", "sigma_range"});
-      const double bearing = table_.angle(3), range = table_.real(4), sb = table_.real(5), sr = table_.real(6);
-      if (!(range > 0.0)) table_.fail("range " + formatDouble(range) + " must be positive");
-      if (range > kMaxRange) table_.fail("range " + formatDouble(range) + " m is beyond 10^6 m");
+      const double bearing = table_.angle(3), range = table_.range(4), sb = table_.real(5), sr = table_.real(6);
       if (!(sb > 0.0) || !(sr > 0.0)) table_.fail("standard deviations must be positive");
       z.z = Vec2(range, bearing);
       z.noise = diagonalNoise(sr, sb);

@@ -166,11 +166,9 @@ std::optional<MeasurementRecord> measurementRow(TextTable& t, TimeOrder& order, 
   MeasurementRecord m;
   m.time = t.real(0);
   const int barcode = t.integer(1);
-  m.range = t.real(2);
+  m.range = t.range(2);
   m.bearing = t.angle(3);
   order.check(t, m.time);
-  if (!(m.range > 0.0)) t.fail("range " + formatDouble(m.range) + " must be positive");
-  if (m.range > kMaxRange) t.fail("range " + formatDouble(m.range) + " m is beyond 10^6 m");
   const auto it = barcodes.find(barcode);
   if (it == barcodes.end()) {
     ++dropped.unknown_barcodes;

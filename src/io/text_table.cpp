@@ -135,6 +135,13 @@ double TextTable::real(std::size_t col) const {
   return value;
 }
 
+double TextTable::range(std::size_t col) const {
+  const double value = real(col);
+  if (!(value > 0.0)) fail("range " + formatDouble(value) + " must be positive");
+  if (value > kMaxRange) fail("range " + formatDouble(value) + " m is beyond 10^6 m");
+  return value;
+}
+
 double TextTable::angle(std::size_t col) const {
   const double value = real(col);
   constexpr double kTurn = 6.283185307179586;

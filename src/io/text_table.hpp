@@ -68,6 +68,8 @@ class TextTable {
   /// real(), an angle in radians within one turn either way (|a| <= 2 pi, to the printed
   /// precision): a bearing or a heading increment beyond that is not one.
   double angle(std::size_t col) const;
+  /// real(), a sensor's range in metres: > 0 and at most kMaxRange.
+  double range(std::size_t col) const;
   int integer(std::size_t col) const;
   long long index(std::size_t col) const;
   /// Half a unit of the last printed decimal of column `col` as written ("3.141593":

@@ -52,13 +52,6 @@ double laserAngle(const TextTable& r, std::size_t col) {
   return std::clamp(angle, 0.0, kPi);
 }
 
-double positiveRange(const TextTable& r, std::size_t col) {
-  const double range = r.real(col);
-  if (!(range > 0.0)) r.fail("range " + formatDouble(range) + " must be positive");
-  if (range > kMaxRange) r.fail("range " + formatDouble(range) + " m is beyond 10^6 m");
-  return range;
-}
-
 /// A row of the UTS file, checked: (range, angle, feature id).
 struct AssociatedRow {
   double range = 0.0, angle = 0.0;
@@ -69,7 +62,7 @@ struct AssociatedRow {
 
 AssociatedRow associatedRow(const TextTable& r) {
   AssociatedRow a;
-  a.range = positiveRange(r, 1);
+  a.range = r.range(1);
   a.angle = laserAngle(r, 2);
   const long long id = r.index(3);
   r.real(4);  // the distributor's estimate: checked, not used
@@ -137,7 +130,7 @@ class VictoriaParkSource final : public EventSource {
         const TextTable& r = *observations_.table;
         if (raw_) {
           r.index(1);  // scan index: checked, not used
-          const double range = positiveRange(r, 2), angle = laserAngle(r, 3);
+          const double range = r.range(2), angle = laserAngle(r, 3);
           const double diameter = r.real(4);  // checked, not used
           if (diameter < 0.0) r.fail("diameter " + formatDouble(diameter) + " must not be negative");
           Observation z{kUnknownLandmark, Vec2(range, angle - kPi / 2), std::nullopt};

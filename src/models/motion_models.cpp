@@ -34,8 +34,6 @@ void requireDt(double dt) {
 
 }  // namespace
 
-void checkIncrement(const MotionIncrement& m, const std::string& who);
-
 namespace {
 /// The increment of a model's public linearize(): finite (a non-finite pose or input gives
 /// none), its noise positive semi-definite.
