@@ -443,6 +443,10 @@ void bindAssociation(py::module_& m) {
                                   &parseProvisionalPlace, &provisionalPlaceName)
       .value("Filter", ProvisionalPlace::Filter)
       .value("Held", ProvisionalPlace::Held);
+  bindNamedEnum<ConfirmRule>(m, "ConfirmRule", "'count' | 'score' (association/association.hpp)", &parseConfirmRule,
+                             &confirmRuleName)
+      .value("Count", ConfirmRule::Count)
+      .value("Score", ConfirmRule::Score);
   py::class_<AssociationOptions>(m, "AssociationOptions",
                                  "Data association's options (association/association.hpp; `seif run --association`)")
       .def(py::init<>())
@@ -453,6 +457,12 @@ void bindAssociation(py::module_& m) {
                      "MarginalMode the gates use; None: the filter's (Local in the SEIF, Exact in the others)")
       .def_readwrite("confirm", &AssociationOptions::confirm, "sightings that confirm a provisional landmark")
       .def_readwrite("window", &AssociationOptions::window, "scans it has to be confirmed in")
+      .def_readwrite("confirm_rule", &AssociationOptions::confirm_rule,
+                     "ConfirmRule: count (confirm sightings in window scans) or score (a track score)")
+      .def_readwrite("detection_probability", &AssociationOptions::detection_probability,
+                     "score: probability that a landmark in the sensor's footprint is reported")
+      .def_readwrite("clutter_density", &AssociationOptions::clutter_density,
+                     "score: false detections per unit of measurement space (0: estimated)")
       .def_readwrite("provisional", &AssociationOptions::provisional, "ProvisionalPlace: in the filter or held outside it")
       .def_readwrite("drop_unlabelled", &AssociationOptions::drop_unlabelled,
                      "known: drop observations without a landmark id instead of refusing them")
@@ -461,7 +471,8 @@ void bindAssociation(py::module_& m) {
       .def_readwrite("refresh", &AssociationOptions::refresh)
       .def_readwrite("slack", &AssociationOptions::slack)
       .def("__repr__", [](py::handle s) {
-        return reprOf(s, {"method", "accept", "new_landmark", "marginal", "confirm", "window", "provisional", "merge"});
+        return reprOf(s, {"method", "accept", "new_landmark", "marginal", "confirm", "window", "confirm_rule", "provisional",
+                          "merge"});
       });
   m.def(
       "association_options",

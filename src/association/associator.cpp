@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <iterator>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -46,6 +47,14 @@ ProvisionalPlace parseProvisionalPlace(std::string_view s) {
 }
 
 std::string_view provisionalPlaceName(ProvisionalPlace p) { return p == ProvisionalPlace::Held ? "held" : "filter"; }
+
+ConfirmRule parseConfirmRule(std::string_view s) {
+  if (s == "count") return ConfirmRule::Count;
+  if (s == "score") return ConfirmRule::Score;
+  throw InvalidArgument("unknown confirm rule '" + std::string(s) + "' (expected count or score)");
+}
+
+std::string_view confirmRuleName(ConfirmRule r) { return r == ConfirmRule::Score ? "score" : "count"; }
 
 std::string_view gateMarginalName(std::optional<MarginalMode> m) { return m ? marginalModeName(*m) : "auto"; }
 
@@ -94,6 +103,7 @@ double worstSigma(const Mat2& C) {
 struct Provisional {
   std::size_t born = 0;  // the scan (Impl::scans) that started it
   int sightings = 1;
+  double score = 0.0;  // ConfirmRule::Score: the track's log-likelihood ratio since its first sighting
   // ProvisionalPlace::Held: the landmark's own estimate outside the filter, y = mean +
   // lever * e_x + e, its error e_x shared with the pose's (the error of the pose that first
   // saw it, taken as the current pose's: the lever is the inverse sensor model's pose
@@ -122,6 +132,11 @@ struct Associator::Impl {
   std::vector<int> started;  // landmarks the last scan started in the filter
   std::size_t refresh_cursor = 0;
   std::size_t scans = 0;  // steps with observations so far
+  // ConfirmRule::Score: the sensor's footprint, the box in measurement space of every
+  // observation so far (empty: lo > hi), and the score's thresholds.
+  Vec2 footprint_lo = Vec2::Constant(std::numeric_limits<double>::infinity());
+  Vec2 footprint_hi = Vec2::Constant(-std::numeric_limits<double>::infinity());
+  double confirm_score = 0.0, delete_score = 0.0;
   std::vector<double> joint_gates;  // JCBB's chi-square(2k) gates (ScanProblem::joint_gates)
   // What the last scan's observations changed, for discardScan(): the counts and next id
   // before them, the landmarks they started, each provisional entry they touched as it was
@@ -133,14 +148,29 @@ struct Associator::Impl {
     int next_id = 0;
     std::vector<int> fresh;
     std::vector<std::pair<int, std::optional<Provisional>>> provisional;
+    std::unordered_set<int> recorded;  // the ids in `provisional`
     std::vector<std::pair<int, int>> tallies;
     std::size_t touched = 0, started = 0;
+    Vec2 footprint_lo = Vec2::Zero(), footprint_hi = Vec2::Zero();
   } scan_record;
 
+  bool scored() const { return options.confirm_rule == ConfirmRule::Score; }
+  /// Whether a new landmark starts provisional (count 1: confirmed at once).
+  bool provisionalStart() const { return scored() || options.confirm > 1; }
+  bool confirmed(const Provisional& p) const {
+    return scored() ? p.score >= confirm_score : p.sightings >= options.confirm;
+  }
+  /// The footprint's volume in measurement space (0 while it is a point or a segment).
+  double footprintVolume() const {
+    const Vec2 extent = (footprint_hi - footprint_lo).cwiseMax(0.0);
+    return extent.prod();
+  }
+  bool inFootprint(const Vec2& z) const {
+    return (z.array() >= footprint_lo.array()).all() && (z.array() <= footprint_hi.array()).all();
+  }
+
   void recordProvisional(int id) {
-    for (const auto& [kept, before] : scan_record.provisional) {
-      if (kept == id) return;  // the first record is the state before the scan
-    }
+    if (!scan_record.recorded.insert(id).second) return;  // the first record is the state before the scan
     const auto p = provisional.find(id);
     scan_record.provisional.emplace_back(id, p == provisional.end() ? std::nullopt : std::optional<Provisional>(p->second));
   }
@@ -171,6 +201,8 @@ struct Associator::Impl {
     next_id = scan_record.next_id;
     touched.resize(scan_record.touched);
     started.resize(scan_record.started);
+    footprint_lo = scan_record.footprint_lo;
+    footprint_hi = scan_record.footprint_hi;
   }
 
   /// The marginal the gates use: the option's, or the filter's own (auto).
@@ -275,13 +307,61 @@ struct Associator::Impl {
         const std::int64_t total =
             std::int64_t{pk->second.sightings} + (pd != provisional.end() ? pd->second.sightings : options.confirm);
         pk->second.sightings = static_cast<int>(std::min<std::int64_t>(total, options.confirm));
-        if (pk->second.sightings >= options.confirm) provisional.erase(pk);
+        // The score: the two tracks' evidence adds (a confirmed drop confirms keep).
+        pk->second.score += pd != provisional.end() ? pd->second.score : confirm_score;
+        if (confirmed(pk->second)) provisional.erase(pk);
       }
       forget(drop);
       grid.put(keep, filter.landmark(keep));
       ++counts.merged;
       merged_any = true;
       done = id;  // `id` may be gone: on to the next
+    }
+  }
+
+  /// ConfirmRule::Score: grows the footprint by the scan's observations and returns
+  /// log(lambda), the clutter density's (the option's, or the observations no landmark
+  /// explained per scan over the footprint's volume, this scan's unpaired ones counted); none
+  /// while the footprint has no volume (the scan then changes no score).
+  std::optional<double> scanClutter(const std::vector<Observation>& observations, const std::vector<int>& pairing) {
+    for (const Observation& z : observations) {
+      footprint_lo = footprint_lo.cwiseMin(z.z);
+      footprint_hi = footprint_hi.cwiseMax(z.z);
+    }
+    const double volume = footprintVolume();
+    if (!(volume > 0.0) || !std::isfinite(volume)) return std::nullopt;
+    double lambda = options.clutter_density;
+    if (lambda == 0.0) {
+      const auto unpaired = static_cast<std::size_t>(std::count(pairing.begin(), pairing.end(), -1));
+      const double unexplained = static_cast<double>(counts.new_landmarks + counts.ambiguous_dropped + unpaired);
+      lambda = std::max(unexplained, 1.0) / (static_cast<double>(scans) * volume);
+    }
+    return std::log(lambda);
+  }
+
+  /// One sighting's term of the track score: log(P_D N(nu; 0, S) / lambda).
+  double sightingScore(const Vec2& nu, const Mat2& S, double log_clutter) const {
+    const Eigen::LLT<Mat2> llt(S);
+    if (llt.info() != Eigen::Success) return 0.0;
+    const Mat2 L = llt.matrixL();
+    const double log_det = 2.0 * (std::log(L(0, 0)) + std::log(L(1, 1)));
+    const double log_density = -0.5 * nu.dot(llt.solve(nu)) - 0.5 * log_det - std::log(2.0 * std::numbers::pi);
+    return std::log(options.detection_probability) + log_density - log_clutter;
+  }
+
+  /// The track score's misses: each provisional landmark started before this scan and not
+  /// seen in it, whose predicted measurement from the pose mean lies in the footprint, adds
+  /// log(1 - P_D).
+  void scoreMisses(const SlamFilter& filter, const Pose2& x, const std::vector<int>& pairing) {
+    const MeasurementModel& sensor = filter.sensorModel();
+    const double miss = std::log1p(-options.detection_probability);
+    const std::unordered_set<int> seen(pairing.begin(), pairing.end());
+    for (auto& [id, p] : provisional) {
+      if (p.born == scans || seen.count(id) > 0) continue;
+      const Vec2 y = p.held ? p.mean : filter.landmark(id);
+      if (!inFootprint(sensor.predict(x, y))) continue;
+      recordProvisional(id);
+      p.score += miss;
     }
   }
 
@@ -317,7 +397,8 @@ struct Associator::Impl {
   void expireProvisional(SlamFilter& filter, std::size_t scan) {
     std::vector<int> expired;
     for (const auto& [id, p] : provisional) {
-      if (scan > p.born + static_cast<std::size_t>(options.window)) expired.push_back(id);
+      const bool rejected = scored() && p.score <= delete_score;  // the track score's test
+      if (rejected || scan > p.born + static_cast<std::size_t>(options.window)) expired.push_back(id);
     }
     std::sort(expired.begin(), expired.end());
     for (int id : expired) {
@@ -336,7 +417,8 @@ Associator::Associator(const AssociationOptions& options) : impl_(std::make_uniq
   }
   // Seen once a scan at most, a landmark born at scan b has its confirm-th sighting at scan
   // b + confirm - 1 at the earliest, and expires after scan b + window.
-  if (o.method != AssociationMethod::Known && o.confirm > 1 && o.window < o.confirm - 1) {
+  if (o.method != AssociationMethod::Known && o.confirm_rule == ConfirmRule::Count && o.confirm > 1 &&
+      o.window < o.confirm - 1) {
     throw InvalidArgument("association: window " + std::to_string(o.window) + " (--window) can never confirm a landmark (confirm " +
                           std::to_string(o.confirm) + " needs a window of at least " + std::to_string(o.confirm - 1) +
                           " scans)");
@@ -346,6 +428,9 @@ Associator::Associator(const AssociationOptions& options) : impl_(std::make_uniq
   impl_->accept_d2 = chi2(o.accept);
   impl_->new_d2 = chi2(o.new_landmark);
   impl_->merge_d2 = o.merge > 0.0 ? chi2(o.merge) : 0.0;
+  // Wald's thresholds for error probabilities alpha (confirming clutter) and beta (removing a landmark).
+  impl_->confirm_score = std::log((1.0 - kTrackFalseDelete) / kTrackFalseConfirm);
+  impl_->delete_score = std::log(kTrackFalseDelete / (1.0 - kTrackFalseConfirm));
 }
 
 Associator::~Associator() = default;
@@ -513,9 +598,13 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   record.next_id = s.next_id;
   record.fresh.clear();
   record.provisional.clear();
+  record.recorded.clear();
   record.tallies.clear();
   record.touched = s.touched.size();
   record.started = s.started.size();
+  record.footprint_lo = s.footprint_lo;
+  record.footprint_hi = s.footprint_hi;
+  const std::optional<double> log_clutter = s.scored() ? s.scanClutter(observations, pairing) : std::nullopt;
   std::vector<Observation> kept;
   kept.reserve(observations.size());
   for (std::size_t i = 0; i < observations.size(); ++i) {
@@ -525,9 +614,16 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
       z.landmark = pairing[i];
       if (const auto p = s.provisional.find(z.landmark); p != s.provisional.end()) {
         s.recordProvisional(z.landmark);
-        if (p->second.held) {
-          s.updateHeld(p->second, sensor, scan.joint, scan.column.at(z.landmark), z);
-          apply = p->second.sightings + 1 >= s.options.confirm;
+        Provisional& track = p->second;
+        ++track.sightings;
+        if (log_clutter) {  // the track score: log(P_D N(nu; 0, S) / lambda)
+          const PredictedMeasurement pm = predictFromMarginal(sensor, scan.joint, scan.column.at(z.landmark), sensor.noise(z));
+          track.score += s.sightingScore(sensor.residual(z.z, pm.z), pm.S, *log_clutter);
+        }
+        const bool confirming = s.confirmed(track);
+        if (track.held) {
+          s.updateHeld(track, sensor, scan.joint, scan.column.at(z.landmark), z);
+          apply = confirming;
           // Confirmed: it enters the filter as one sighting of its fused estimate from here,
           // z = h(x, mean), with noise J_y C J_y^T: every sighting's information, once.
           if (apply) {
@@ -535,21 +631,21 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
             Mat23 J_x;
             Mat2 J_y;
             z.z = sensor.predict(x, p->second.mean, &J_x, &J_y);
-            const Mat2 R = J_y * p->second.covariance * J_y.transpose();
+            const Mat2 R = J_y * track.covariance * J_y.transpose();
             z.noise = 0.5 * (R + R.transpose());
           }
         }
-        if (++p->second.sightings >= s.options.confirm) s.provisional.erase(p);
+        if (confirming) s.provisional.erase(p);
       }
     } else if (nearest[i] > s.new_d2) {
       while (filter.hasLandmark(s.next_id)) ++s.next_id;  // ids the filter held before (a caller's map)
       z.landmark = s.next_id++;
       record.fresh.push_back(z.landmark);
       ++s.counts.new_landmarks;
-      if (s.options.confirm > 1) {
+      if (s.provisionalStart()) {
         s.recordProvisional(z.landmark);
         const bool hold = s.options.provisional == ProvisionalPlace::Held;
-        s.provisional[z.landmark] = Provisional{s.scans, 1, hold, point[i], spread[i], lever[i]};
+        s.provisional[z.landmark] = Provisional{s.scans, 1, 0.0, hold, point[i], spread[i], lever[i]};
         apply = !hold;
       }
       if (apply) s.started.push_back(z.landmark);
@@ -564,6 +660,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
     s.touched.push_back(z.landmark);
     if (apply) kept.push_back(z);
   }
+  if (log_clutter) s.scoreMisses(filter, x, pairing);
   observations = std::move(kept);
   s.counts.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -713,6 +810,7 @@ std::string Associator::saveState() const {
     w.i64(id);
     w.u64(p.born);
     w.i64(p.sightings);
+    w.f64(p.score);
     w.u64(p.held ? 1 : 0);
     w.fixed(p.mean);
     w.fixed(p.covariance);
@@ -722,6 +820,8 @@ std::string Associator::saveState() const {
   writeIds(w, s.started);
   w.u64(s.refresh_cursor);
   w.u64(s.scans);
+  w.fixed(s.footprint_lo);
+  w.fixed(s.footprint_hi);
   return w.bytes();
 }
 
@@ -786,9 +886,18 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
     const int id = readId(r, "provisional landmark");
     Provisional p;
     p.born = static_cast<std::size_t>(r.u64("provisional birth scan"));
-    // Provisional while seen fewer than `confirm` times (associate() erases it at confirm).
-    if (options.confirm <= 1) r.fail("a provisional landmark, but every landmark is confirmed at once (confirm 1)");
-    p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, options.confirm - 1));
+    if (options.confirm_rule == ConfirmRule::Count) {
+      // Provisional while seen fewer than `confirm` times (associate() erases it at confirm).
+      if (options.confirm <= 1) r.fail("a provisional landmark, but every landmark is confirmed at once (confirm 1)");
+      p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, options.confirm - 1));
+    } else {
+      p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, std::numeric_limits<int>::max()));
+    }
+    p.score = r.f64("provisional score");
+    // Provisional while its score is below the confirming threshold (associate() erases it there).
+    if (!std::isfinite(p.score) || (options.confirm_rule == ConfirmRule::Score && p.score >= s.confirm_score)) {
+      r.fail("provisional landmark " + std::to_string(id) + "'s track score is not finite or already confirms it");
+    }
     p.held = r.u64Max("provisional held", 1) == 1;
     r.fixed("provisional mean", p.mean, true);
     r.fixed("provisional covariance", p.covariance, true);
@@ -799,6 +908,15 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
   s.started = readIds(r, "started landmarks");
   s.refresh_cursor = static_cast<std::size_t>(r.u64("refresh cursor"));
   s.scans = static_cast<std::size_t>(r.u64("scans"));
+  r.fixed("footprint", s.footprint_lo);
+  r.fixed("footprint", s.footprint_hi);
+  // Empty (lo +inf, hi -inf) or a box of finite corners.
+  const bool empty = (s.footprint_lo.array() == std::numeric_limits<double>::infinity()).all() &&
+                     (s.footprint_hi.array() == -std::numeric_limits<double>::infinity()).all();
+  if (!empty && !(s.footprint_lo.allFinite() && s.footprint_hi.allFinite() &&
+                  (s.footprint_lo.array() <= s.footprint_hi.array()).all())) {
+    r.fail("the sensor's footprint is neither empty nor a box");
+  }
   for (const auto& [id, p] : s.provisional) {
     if (p.born > s.scans) r.fail("provisional landmark " + std::to_string(id) + " was started after the last scan");
   }

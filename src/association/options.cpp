@@ -23,7 +23,7 @@ constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 
 double probability(std::string_view key, std::string_view v) { return parseReal(key, v, 0.0, 1.0, true); }
 
-const std::array<AssociationOption, 12> kOptions = {{
+const std::array<AssociationOption, 15> kOptions = {{
     {"association", "method", kChoice, "known|nn|jcbb", 0, 0, false,
      "data association: known (the dataset's landmark ids), nn (nearest neighbour: each observation its "
      "closest landmark inside the accept gate, greedily) or jcbb (joint compatibility branch and bound). "
@@ -56,6 +56,25 @@ const std::array<AssociationOption, 12> kOptions = {{
      "scans (steps with observations) a provisional landmark has to be confirmed in",
      [](AssociationOptions& o, std::string_view v) { o.window = static_cast<int>(parseIntegerOf(kOptions, "window", v)); },
      [](const AssociationOptions& o) { return std::to_string(o.window); }},
+    {"confirm-rule", "confirm_rule", kChoice, "count|score", 0, 0, true,
+     "how a provisional landmark is confirmed: count (--confirm sightings within --window scans) or score (a "
+     "track score: each sighting weighed against the clutter density, each scan it lay in the sensor's "
+     "footprint unseen against --detection-probability; undecided after --window scans, removed)",
+     [](AssociationOptions& o, std::string_view v) { o.confirm_rule = parseConfirmRule(v); },
+     [](const AssociationOptions& o) { return std::string(confirmRuleName(o.confirm_rule)); }},
+    {"detection-probability", "detection_probability", kProbability, "", 0, 0, true,
+     "with --confirm-rule score: the probability that a landmark in the sensor's footprint is reported",
+     [](AssociationOptions& o, std::string_view v) {
+       o.detection_probability = options::parseBetween("detection-probability", v, 0.0, 1.0);
+     },
+     [](const AssociationOptions& o) { return formatReal(o.detection_probability); }},
+    {"clutter-density", "clutter_density", Opt::Kind::Real, "", 0, 0, true,
+     "with --confirm-rule score: false detections per unit of measurement space (per m rad for range-bearing; "
+     "0: estimated from the scans as the observations no landmark explained, per scan, over the footprint)",
+     [](AssociationOptions& o, std::string_view v) {
+       o.clutter_density = parseReal("clutter-density", v, 0.0, 1e100, false);
+     },
+     [](const AssociationOptions& o) { return formatReal(o.clutter_density); }},
     {"provisional", "provisional", kChoice, "filter|held", 0, 0, true,
      "where a provisional landmark lives: filter (in the filter from its first sighting, removed exactly if "
      "not confirmed) or held (outside it, its own small estimate, entering the filter at its confirming "

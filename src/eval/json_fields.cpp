@@ -39,7 +39,8 @@ nlohmann::json toJson(const AssociationOptions& o) {
       case AssociationOption::Kind::Choice: j[key] = value; break;
       case AssociationOption::Kind::Integer: j[key] = std::stoll(value); break;
       case AssociationOption::Kind::Probability:
-      case AssociationOption::Kind::Length: j[key] = std::stod(value); break;
+      case AssociationOption::Kind::Length:
+      case AssociationOption::Kind::Real: j[key] = std::stod(value); break;
       case AssociationOption::Kind::Flag: j[key] = value == "true"; break;
     }
   }

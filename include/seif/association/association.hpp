@@ -48,6 +48,29 @@ enum class ProvisionalPlace {
 ProvisionalPlace parseProvisionalPlace(std::string_view s);
 std::string_view provisionalPlaceName(ProvisionalPlace p);
 
+/// How a provisional landmark is confirmed (docs/association.md, "Provisional landmarks").
+enum class ConfirmRule {
+  /// "count": seen `confirm` times within `window` scans of its first sighting.
+  Count,
+  /// "score": a track score, Wald's sequential probability ratio test of "a landmark"
+  /// against "clutter" (Blackman & Popoli 1999, §6.2). From 0 at its first sighting, each
+  /// later sighting adds log(P_D N(nu; 0, S) / lambda) and each scan in which its predicted
+  /// measurement lay in the sensor's footprint unseen adds log(1 - P_D). Confirmed at
+  /// log((1 - beta) / alpha), removed at log(beta / (1 - alpha)) (alpha = kTrackFalseConfirm,
+  /// beta = kTrackFalseDelete) or when `window` scans pass undecided. It weighs sightings
+  /// against the clutter density, so clutter that a count would confirm is not.
+  Score,
+};
+
+/// "count" | "score". Throws InvalidArgument naming the valid names.
+ConfirmRule parseConfirmRule(std::string_view s);
+std::string_view confirmRuleName(ConfirmRule r);
+
+/// The track score's error probabilities (ConfirmRule::Score): alpha, of confirming clutter,
+/// and beta, of removing a landmark.
+inline constexpr double kTrackFalseConfirm = 1e-3;
+inline constexpr double kTrackFalseDelete = 1e-2;
+
 struct AssociationOptions {
   AssociationMethod method = AssociationMethod::Known;
   /// Chi-square probability of the accept gate (2 dof): an observation whose Mahalanobis
@@ -69,6 +92,19 @@ struct AssociationOptions {
   /// scan (docs/association.md).
   int confirm = 4;
   int window = 20;
+  /// Count (`confirm` sightings in `window` scans) or Score (a track score weighing each
+  /// sighting against the clutter density and each miss against `detection_probability`;
+  /// `confirm` unused, `window` the longest it stays undecided).
+  ConfirmRule confirm_rule = ConfirmRule::Count;
+  /// Score: the probability P_D that a landmark in the sensor's footprint is reported. The
+  /// footprint is the box, in measurement space (range and bearing), of every observation
+  /// seen so far.
+  double detection_probability = 0.9;
+  /// Score: false detections per unit of measurement space (per m rad for range-bearing).
+  /// 0: estimated from the scans so far, as the observations no landmark explained (new
+  /// landmarks started, ambiguous ones dropped) per scan over the footprint's volume - an
+  /// upper bound, since new landmarks count as clutter there.
+  double clutter_density = 0.0;
   ProvisionalPlace provisional = ProvisionalPlace::Filter;
   /// Known: drop the observations the data names no landmark for (clutter in a simulated
   /// world) and count them, instead of refusing the step - the reference run that knows
@@ -102,8 +138,9 @@ std::optional<MarginalMode> parseGateMarginal(std::string_view s);
 /// table (seif.association_options()) come from; `attribute` names the AssociationOptions
 /// member (Python's attribute, the json key).
 struct AssociationOption {
-  /// Probability: a chi-square probability in [0, 1). Flag: true | false (a bare flag).
-  enum class Kind { Choice, Integer, Probability, Length, Flag };
+  /// Probability: a probability in [0, 1). Real: a non-negative number. Flag: true | false
+  /// (a bare flag).
+  enum class Kind { Choice, Integer, Probability, Length, Real, Flag };
   std::string_view key;        ///< the flag, "accept-gate"
   std::string_view attribute;  ///< "accept"
   Kind kind;
