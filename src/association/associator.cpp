@@ -137,6 +137,7 @@ struct Associator::Impl {
   Vec2 footprint_lo = Vec2::Constant(std::numeric_limits<double>::infinity());
   Vec2 footprint_hi = Vec2::Constant(-std::numeric_limits<double>::infinity());
   double confirm_score = 0.0, delete_score = 0.0;
+  std::size_t explained = 0;  // observations paired with a confirmed landmark so far
   std::vector<double> joint_gates;  // JCBB's chi-square(2k) gates (ScanProblem::joint_gates)
   // What the last scan's observations changed, for discardScan(): the counts and next id
   // before them, the landmarks they started, each provisional entry they touched as it was
@@ -152,6 +153,7 @@ struct Associator::Impl {
     std::vector<std::pair<int, int>> tallies;
     std::size_t touched = 0, started = 0;
     Vec2 footprint_lo = Vec2::Zero(), footprint_hi = Vec2::Zero();
+    std::size_t explained = 0;
   } scan_record;
 
   bool scored() const { return options.confirm_rule == ConfirmRule::Score; }
@@ -203,6 +205,7 @@ struct Associator::Impl {
     started.resize(scan_record.started);
     footprint_lo = scan_record.footprint_lo;
     footprint_hi = scan_record.footprint_hi;
+    explained = scan_record.explained;
   }
 
   /// The marginal the gates use: the option's, or the filter's own (auto).
@@ -319,21 +322,22 @@ struct Associator::Impl {
     }
   }
 
-  /// ConfirmRule::Score: grows the footprint by the scan's observations and returns
-  /// log(lambda), the clutter density's (the option's, or the observations no landmark
-  /// explained per scan over the footprint's volume, this scan's unpaired ones counted); none
-  /// while the footprint has no volume (the scan then changes no score).
+  /// ConfirmRule::Score: grows the footprint by the scan's observations, counts those paired
+  /// with confirmed landmarks, and returns log(lambda), the clutter density's: the option's,
+  /// or the observations so far that no confirmed landmark explained, per scan, over the
+  /// footprint's volume (an upper bound: a landmark's sightings before it is confirmed count
+  /// as clutter). None while the footprint has no volume (the scan then changes no score).
   std::optional<double> scanClutter(const std::vector<Observation>& observations, const std::vector<int>& pairing) {
-    for (const Observation& z : observations) {
-      footprint_lo = footprint_lo.cwiseMin(z.z);
-      footprint_hi = footprint_hi.cwiseMax(z.z);
+    for (std::size_t i = 0; i < observations.size(); ++i) {
+      footprint_lo = footprint_lo.cwiseMin(observations[i].z);
+      footprint_hi = footprint_hi.cwiseMax(observations[i].z);
+      if (pairing[i] >= 0 && provisional.count(pairing[i]) == 0) ++explained;
     }
     const double volume = footprintVolume();
     if (!(volume > 0.0) || !std::isfinite(volume)) return std::nullopt;
     double lambda = options.clutter_density;
     if (lambda == 0.0) {
-      const auto unpaired = static_cast<std::size_t>(std::count(pairing.begin(), pairing.end(), -1));
-      const double unexplained = static_cast<double>(counts.new_landmarks + counts.ambiguous_dropped + unpaired);
+      const double unexplained = static_cast<double>(counts.observations - explained);
       lambda = std::max(unexplained, 1.0) / (static_cast<double>(scans) * volume);
     }
     return std::log(lambda);
@@ -604,6 +608,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   record.started = s.started.size();
   record.footprint_lo = s.footprint_lo;
   record.footprint_hi = s.footprint_hi;
+  record.explained = s.explained;
   const std::optional<double> log_clutter = s.scored() ? s.scanClutter(observations, pairing) : std::nullopt;
   std::vector<Observation> kept;
   kept.reserve(observations.size());
@@ -822,6 +827,7 @@ std::string Associator::saveState() const {
   w.u64(s.scans);
   w.fixed(s.footprint_lo);
   w.fixed(s.footprint_hi);
+  w.u64(s.explained);
   return w.bytes();
 }
 
@@ -917,6 +923,7 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
                   (s.footprint_lo.array() <= s.footprint_hi.array()).all())) {
     r.fail("the sensor's footprint is neither empty nor a box");
   }
+  s.explained = static_cast<std::size_t>(r.u64Max("explained observations", s.counts.observations));
   for (const auto& [id, p] : s.provisional) {
     if (p.born > s.scans) r.fail("provisional landmark " + std::to_string(id) + " was started after the last scan");
   }
