@@ -379,9 +379,9 @@ TEST(Association, TheTrackScoreRemovesClutterItKeepsSeeingInViewUnseen) {
       std::vector<Observation> z = s.steps[k].observations, zt = z;
       // At the centre of the footprint the earlier scans drew, which holds it as the robot drives on.
       if (k == 20) z.push_back({kUnknownLandmark, 0.5 * (lo + hi), std::nullopt});
-      for (const Observation& o : zt) {
-        lo = lo.cwiseMin(o.z);
-        hi = hi.cwiseMax(o.z);
+      for (const Observation& real : zt) {
+        lo = lo.cwiseMin(real.z);
+        hi = hi.cwiseMax(real.z);
       }
       a.associate(*with, k, z);
       b.associate(*without, k, zt);
@@ -599,11 +599,19 @@ TEST(Association, AHeldLandmarkEntersAtItsConfirmingSightingWithEverySighting) {
 
 namespace {
 
-/// nn or jcbb on the park with one false detection per scan and 10 % missed detections.
+/// The park's clutter: false detections per scan, the steps (0: the preset's) and the rule.
+struct ParkClutter {
+  double clutter = 1.0;
+  int steps = 0;
+  ConfirmRule rule = ConfirmRule::Count;
+};
+
+/// nn or jcbb on the park with false detections (one per scan unless told) and 10 % missed detections.
 AssociationCounts parkWithClutter(const std::string& filter, AssociationMethod method, std::uint64_t seed,
-                                  double* landmark_rmse, ProvisionalPlace place = ProvisionalPlace::Filter) {
-  WorldConfig world = presetConfig(WorldPreset::Park, 0, 0, seed);
-  world.clutter = 1.0;
+                                  double* landmark_rmse, ProvisionalPlace place = ProvisionalPlace::Filter,
+                                  const ParkClutter& park = {}) {
+  WorldConfig world = presetConfig(WorldPreset::Park, 0, park.steps, seed);
+  world.clutter = park.clutter;
   world.detection_probability = 0.9;
   const Dataset data = buildDataset(simulate(world));
   FilterConfig config = paperFilterConfig(data.noise.value_or(world.noise));
@@ -612,6 +620,7 @@ AssociationCounts parkWithClutter(const std::string& filter, AssociationMethod m
   o.method = method;
   o.marginal = filter.rfind("seif", 0) == 0 ? MarginalMode::Local : MarginalMode::Exact;
   o.provisional = place;
+  o.confirm_rule = park.rule;
   Associator a(o);
   RunLoopOptions loop;
   loop.associate = [&](SlamFilter& filt, const Step&, std::size_t k, std::vector<Observation>& z) { a.associate(filt, k, z); };
@@ -663,26 +672,14 @@ TEST(Association, TheTrackScoreKeepsDenseClutterOutOfTheMap) {
   // Counted (4 sightings in 20 scans), clutter confirms itself: 271 spurious landmarks of 312,
   // 97.2 % correct. Scored against the clutter density it does not (docs/association.md,
   // "Provisional landmarks").
-  WorldConfig world = presetConfig(WorldPreset::Park, 0, 300, 1);
-  world.clutter = 20.0;
-  world.detection_probability = 0.9;
-  const Dataset data = buildDataset(simulate(world));
-  const FilterConfig config = paperFilterConfig(data.noise.value_or(world.noise));
   for (ConfirmRule rule : {ConfirmRule::Count, ConfirmRule::Score}) {
-    auto f = makeFilter("ekf", startPose(data), config);
-    AssociationOptions o;
-    o.method = AssociationMethod::NearestNeighbour;
-    o.confirm_rule = rule;
-    Associator a(o);
-    RunLoopOptions loop;
-    loop.associate = [&](SlamFilter& filt, const Step&, std::size_t k, std::vector<Observation>& z) { a.associate(filt, k, z); };
-    runLoop(*f, data, {}, loop);
-    a.finish(*f);
-    const AssociationCounts& c = a.counts();
+    double rmse = 0.0;
+    const AssociationCounts c = parkWithClutter("ekf", AssociationMethod::NearestNeighbour, 1, &rmse,
+                                                ProvisionalPlace::Filter, ParkClutter{20.0, 300, rule});
     const double correct = static_cast<double>(c.correct) / static_cast<double>(c.scored);
-    std::printf("%s: %.4f correct of %zu, %zu landmarks (%zu spurious, %zu duplicates)\n",
+    std::printf("%s: %.4f correct of %zu, %zu landmarks (%zu spurious, %zu duplicates), map %.3f m\n",
                 std::string(confirmRuleName(rule)).c_str(), correct, c.scored, c.landmarks_final, c.spurious_landmarks,
-                c.duplicate_landmarks);
+                c.duplicate_landmarks, rmse);
     if (rule == ConfirmRule::Count) {
       EXPECT_GT(c.spurious_landmarks, 100u);  // what the score is there to cure
       continue;
@@ -691,6 +688,7 @@ TEST(Association, TheTrackScoreKeepsDenseClutterOutOfTheMap) {
     EXPECT_GT(c.scored, 1500u);
     EXPECT_LE(c.spurious_landmarks, 5u);
     EXPECT_LE(c.duplicate_landmarks, 3u);
+    EXPECT_LT(rmse, 0.6);  // known association on this log: 0.46 m
   }
 }
 

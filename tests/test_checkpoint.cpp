@@ -417,11 +417,22 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
     ++seeds;
   }
   // The associator's state a run's checkpoint carries (Associator::saveState; written by
-  // Associator.state_bytes() after 200 steps of the park with clutter, JCBB, held landmarks).
-  std::ifstream state_file(root / "corpus" / "fuzz_checkpoint" / "associator.state", std::ios::binary);
-  const std::string associator((std::istreambuf_iterator<char>(state_file)), std::istreambuf_iterator<char>());
+  // Associator.state_bytes() after 200 steps of the park with clutter, JCBB, held landmarks,
+  // the track score). Version 1 (before the track score; the count, one false detection a
+  // scan) restores with the count's state and writes version 2.
+  const auto read = [&root](const char* file) {
+    std::ifstream in(root / "corpus" / "fuzz_checkpoint" / file, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string associator = read("associator.state"), version1 = read("associator-v1.state");
   ASSERT_GT(associator.size(), 1000u);
+  ASSERT_GT(version1.size(), 1000u);
   EXPECT_TRUE(Associator::restoreState(associator, "associator.state").saveState() == associator);
+  const Associator old = Associator::restoreState(version1, "associator-v1.state");
+  EXPECT_EQ(old.options().confirm_rule, ConfirmRule::Count);
+  EXPECT_GT(old.counts().new_landmarks, 0u);
+  const std::string rewritten = old.saveState();
+  EXPECT_TRUE(Associator::restoreState(rewritten, "rewritten").saveState() == rewritten);
   // Every truncation is refused; every flipped byte, resealed, restores or is refused.
   for (std::size_t n = 0; n < associator.size(); ++n) {
     EXPECT_THROW((void)Associator::restoreState(associator.substr(0, n), "cut"), DataError) << n;

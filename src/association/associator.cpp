@@ -761,6 +761,8 @@ void writeIds(ArchiveWriter& w, const std::vector<int>& ids) {
   for (int id : ids) w.i64(id);
 }
 
+constexpr std::string_view kStateSection = "associator v2";
+
 int readId(ArchiveReader& r, const char* what) {
   return static_cast<int>(r.i64In(what, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
 }
@@ -776,7 +778,7 @@ std::vector<int> readIds(ArchiveReader& r, const char* what) {
 std::string Associator::saveState() const {
   const Impl& s = *impl_;
   ArchiveWriter w;
-  w.section("associator");
+  w.section(kStateSection);
   w.count(associationOptions().size());
   for (const AssociationOption& o : associationOptions()) {
     w.str(o.key);
@@ -833,7 +835,15 @@ std::string Associator::saveState() const {
 
 Associator Associator::restoreState(std::string_view bytes, const std::string& name) {
   ArchiveReader r(bytes, name);
-  r.section("associator");
+  // Version 2 added the track score (each provisional landmark's score, the footprint, the
+  // explained observations); a version-1 state restores with none of them (its rule: count).
+  bool scored_state = true;
+  try {
+    r.section(kStateSection);
+  } catch (const DataError&) {
+    r.section("associator");
+    scored_state = false;
+  }
   AssociationOptions options;
   const std::size_t n_options = r.count("association options", 2);
   for (std::size_t i = 0; i < n_options; ++i) {
@@ -899,7 +909,7 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
     } else {
       p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, std::numeric_limits<int>::max()));
     }
-    p.score = r.f64("provisional score");
+    if (scored_state) p.score = r.f64("provisional score");
     // Provisional while its score is below the confirming threshold (associate() erases it there).
     if (!std::isfinite(p.score) || (options.confirm_rule == ConfirmRule::Score && p.score >= s.confirm_score)) {
       r.fail("provisional landmark " + std::to_string(id) + "'s track score is not finite or already confirms it");
@@ -914,8 +924,10 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
   s.started = readIds(r, "started landmarks");
   s.refresh_cursor = static_cast<std::size_t>(r.u64("refresh cursor"));
   s.scans = static_cast<std::size_t>(r.u64("scans"));
-  r.fixed("footprint", s.footprint_lo);
-  r.fixed("footprint", s.footprint_hi);
+  if (scored_state) {
+    r.fixed("footprint", s.footprint_lo);
+    r.fixed("footprint", s.footprint_hi);
+  }
   // Empty (lo +inf, hi -inf) or a box of finite corners.
   const bool empty = (s.footprint_lo.array() == std::numeric_limits<double>::infinity()).all() &&
                      (s.footprint_hi.array() == -std::numeric_limits<double>::infinity()).all();
@@ -923,7 +935,7 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
                   (s.footprint_lo.array() <= s.footprint_hi.array()).all())) {
     r.fail("the sensor's footprint is neither empty nor a box");
   }
-  s.explained = static_cast<std::size_t>(r.u64Max("explained observations", s.counts.observations));
+  if (scored_state) s.explained = static_cast<std::size_t>(r.u64Max("explained observations", s.counts.observations));
   for (const auto& [id, p] : s.provisional) {
     if (p.born > s.scans) r.fail("provisional landmark " + std::to_string(id) + " was started after the last scan");
   }
