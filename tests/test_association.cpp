@@ -13,6 +13,7 @@
 #include <seif/filters/factory.hpp>
 #include <seif/sim/world.hpp>
 #include "association/scan.hpp"
+#include "association/track_score.hpp"
 #include "forwarding_filter.hpp"
 
 #include <Eigen/Cholesky>
@@ -243,7 +244,19 @@ TEST(Association, BadOptionsAreRefused) {
   o = AssociationOptions{};
   o.confirm = 0;
   EXPECT_THROW(Associator{o}, InvalidArgument);
+  o = AssociationOptions{};
+  o.method = AssociationMethod::NearestNeighbour;
+  o.confirm_rule = ConfirmRule::Score;
+  o.window = 0;  // nothing could ever be confirmed
+  EXPECT_THROW(Associator{o}, InvalidArgument);
+  o.window = 1;
+  o.detection_probability = 1.0;  // log(1 - P_D): a miss would be -inf
+  EXPECT_THROW(Associator{o}, InvalidArgument);
+  o.detection_probability = 0.9;
+  o.clutter_density = -1.0;
+  EXPECT_THROW(Associator{o}, InvalidArgument);
   EXPECT_THROW(parseAssociationMethod("greedy"), InvalidArgument);
+  EXPECT_THROW(parseConfirmRule("vote"), InvalidArgument);
 }
 
 namespace {
@@ -357,6 +370,25 @@ TEST(Association, AnUnconfirmedLandmarkIsRemovedExactly) {
   EXPECT_LT((t.with->poseCovariance() - t.without->poseCovariance()).norm(), 1e-9);
 }
 
+TEST(Association, TheTrackScoresTermsAreTheClosedForms) {
+  // log(P_D N(nu; 0, S) / lambda) for S = diag(4, 1) (|S| = 4), nu = (2, 1) (d^2 = 2):
+  // log 0.9 - 1 - log(2 pi * 2) - log 0.5; a miss log 0.1; the thresholds log(0.99 / 0.001)
+  // and log(0.01 / 0.999).
+  const Mat2 S = Vec2(4.0, 1.0).asDiagonal();
+  const double expected = std::log(0.9) - 1.0 - std::log(4.0 * 3.14159265358979323846) - std::log(0.5);
+  EXPECT_NEAR(trackSightingScore(Vec2(2.0, 1.0), S, 0.9, std::log(0.5)), expected, 1e-12);
+  Mat2 rotated;  // the same S seen in other axes: the density does not depend on them
+  const double c = std::cos(0.7), s = std::sin(0.7);
+  rotated << c, -s, s, c;
+  EXPECT_NEAR(trackSightingScore(rotated * Vec2(2.0, 1.0), rotated * S * rotated.transpose(), 0.9, std::log(0.5)),
+              expected, 1e-12);
+  EXPECT_EQ(trackSightingScore(Vec2(1.0, 0.0), Mat2::Zero(), 0.9, 0.0), 0.0);  // no covariance: no evidence
+  EXPECT_NEAR(trackMissScore(0.9), std::log(0.1), 1e-15);
+  EXPECT_NEAR(trackConfirmScore(), std::log(0.99 / 0.001), 1e-12);
+  EXPECT_NEAR(trackDeleteScore(), std::log(0.01 / 0.999), 1e-12);
+  EXPECT_LE(2.0 * trackMissScore(0.9), trackDeleteScore());  // two misses in view remove (below)
+}
+
 TEST(Association, TheTrackScoreRemovesClutterItKeepsSeeingInViewUnseen) {
   // A false detection at step 20 starts a provisional landmark. Under the track score each
   // later scan in which it lies in the footprint unseen adds log(1 - P_D) = log 0.1, so two
@@ -385,6 +417,16 @@ TEST(Association, TheTrackScoreRemovesClutterItKeepsSeeingInViewUnseen) {
       }
       a.associate(*with, k, z);
       b.associate(*without, k, zt);
+      // In the filter from step 20's update; two scans unseen in view are needed, so it is
+      // there at least at 21 and 22 (every step here has a scan), and gone within ten scans
+      // (as the robot turns, its prediction leaves the footprint on some of them).
+      const std::size_t extra = with->landmarkIds().size() - without->landmarkIds().size();
+      if (rule == ConfirmRule::Score && (k == 21 || k == 22)) {
+        EXPECT_EQ(extra, 1u) << "step " << k;
+      }
+      if (rule == ConfirmRule::Score && k >= 31) {
+        EXPECT_EQ(extra, 0u) << "step " << k;
+      }
       with->update(z);
       without->update(zt);
     }

@@ -5,6 +5,7 @@
 #include <seif/association/association.hpp>
 #include "association/candidate_grid.hpp"
 #include "association/scan.hpp"
+#include "association/track_score.hpp"
 #include "core/binary_archive.hpp"
 #include "filters/option_values.hpp"
 
@@ -16,7 +17,6 @@
 #include <cstdint>
 #include <iterator>
 #include <limits>
-#include <numbers>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -153,7 +153,6 @@ struct Associator::Impl {
     std::vector<std::pair<int, int>> tallies;
     std::size_t touched = 0, started = 0;
     Vec2 footprint_lo = Vec2::Zero(), footprint_hi = Vec2::Zero();
-    std::size_t explained = 0;
   } scan_record;
 
   bool scored() const { return options.confirm_rule == ConfirmRule::Score; }
@@ -205,7 +204,7 @@ struct Associator::Impl {
     started.resize(scan_record.started);
     footprint_lo = scan_record.footprint_lo;
     footprint_hi = scan_record.footprint_hi;
-    explained = scan_record.explained;
+    // `explained` stays, as counts.observations and scans do: the clutter estimate's ratio.
   }
 
   /// The marginal the gates use: the option's, or the filter's own (auto).
@@ -310,9 +309,14 @@ struct Associator::Impl {
         const std::int64_t total =
             std::int64_t{pk->second.sightings} + (pd != provisional.end() ? pd->second.sightings : options.confirm);
         pk->second.sightings = static_cast<int>(std::min<std::int64_t>(total, options.confirm));
-        // The score: the two tracks' evidence adds (a confirmed drop confirms keep).
-        pk->second.score += pd != provisional.end() ? pd->second.score : confirm_score;
-        if (confirmed(pk->second)) provisional.erase(pk);
+        if (pd == provisional.end()) {
+          provisional.erase(pk);  // merged with a confirmed landmark: confirmed, whatever the rule
+        } else {
+          // The score: each scan saw at most one of the two, and the other missed it there,
+          // so their sum counts those misses twice; the better of either and the sum.
+          pk->second.score = std::max({pk->second.score, pd->second.score, pk->second.score + pd->second.score});
+          if (confirmed(pk->second)) provisional.erase(pk);
+        }
       }
       forget(drop);
       grid.put(keep, filter.landmark(keep));
@@ -340,17 +344,8 @@ struct Associator::Impl {
       const double unexplained = static_cast<double>(counts.observations - explained);
       lambda = std::max(unexplained, 1.0) / (static_cast<double>(scans) * volume);
     }
+    if (!(lambda > 0.0) || !std::isfinite(lambda)) return std::nullopt;  // a footprint of no usable volume
     return std::log(lambda);
-  }
-
-  /// One sighting's term of the track score: log(P_D N(nu; 0, S) / lambda).
-  double sightingScore(const Vec2& nu, const Mat2& S, double log_clutter) const {
-    const Eigen::LLT<Mat2> llt(S);
-    if (llt.info() != Eigen::Success) return 0.0;
-    const Mat2 L = llt.matrixL();
-    const double log_det = 2.0 * (std::log(L(0, 0)) + std::log(L(1, 1)));
-    const double log_density = -0.5 * nu.dot(llt.solve(nu)) - 0.5 * log_det - std::log(2.0 * std::numbers::pi);
-    return std::log(options.detection_probability) + log_density - log_clutter;
   }
 
   /// The track score's misses: each provisional landmark started before this scan and not
@@ -358,7 +353,7 @@ struct Associator::Impl {
   /// log(1 - P_D).
   void scoreMisses(const SlamFilter& filter, const Pose2& x, const std::vector<int>& pairing) {
     const MeasurementModel& sensor = filter.sensorModel();
-    const double miss = std::log1p(-options.detection_probability);
+    const double miss = trackMissScore(options.detection_probability);
     const std::unordered_set<int> seen(pairing.begin(), pairing.end());
     for (auto& [id, p] : provisional) {
       if (p.born == scans || seen.count(id) > 0) continue;
@@ -421,6 +416,10 @@ Associator::Associator(const AssociationOptions& options) : impl_(std::make_uniq
   }
   // Seen once a scan at most, a landmark born at scan b has its confirm-th sighting at scan
   // b + confirm - 1 at the earliest, and expires after scan b + window.
+  if (o.method != AssociationMethod::Known && o.confirm_rule == ConfirmRule::Score && o.window < 1) {
+    throw InvalidArgument("association: window 0 (--window) can never confirm a landmark by its track score (confirm-rule "
+                          "score needs a window of at least 1 scan)");
+  }
   if (o.method != AssociationMethod::Known && o.confirm_rule == ConfirmRule::Count && o.confirm > 1 &&
       o.window < o.confirm - 1) {
     throw InvalidArgument("association: window " + std::to_string(o.window) + " (--window) can never confirm a landmark (confirm " +
@@ -433,8 +432,8 @@ Associator::Associator(const AssociationOptions& options) : impl_(std::make_uniq
   impl_->new_d2 = chi2(o.new_landmark);
   impl_->merge_d2 = o.merge > 0.0 ? chi2(o.merge) : 0.0;
   // Wald's thresholds for error probabilities alpha (confirming clutter) and beta (removing a landmark).
-  impl_->confirm_score = std::log((1.0 - kTrackFalseDelete) / kTrackFalseConfirm);
-  impl_->delete_score = std::log(kTrackFalseDelete / (1.0 - kTrackFalseConfirm));
+  impl_->confirm_score = trackConfirmScore();
+  impl_->delete_score = trackDeleteScore();
 }
 
 Associator::~Associator() = default;
@@ -608,7 +607,6 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   record.started = s.started.size();
   record.footprint_lo = s.footprint_lo;
   record.footprint_hi = s.footprint_hi;
-  record.explained = s.explained;
   const std::optional<double> log_clutter = s.scored() ? s.scanClutter(observations, pairing) : std::nullopt;
   std::vector<Observation> kept;
   kept.reserve(observations.size());
@@ -623,7 +621,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
         ++track.sightings;
         if (log_clutter) {  // the track score: log(P_D N(nu; 0, S) / lambda)
           const PredictedMeasurement pm = predictFromMarginal(sensor, scan.joint, scan.column.at(z.landmark), sensor.noise(z));
-          track.score += s.sightingScore(sensor.residual(z.z, pm.z), pm.S, *log_clutter);
+          track.score += trackSightingScore(sensor.residual(z.z, pm.z), pm.S, s.options.detection_probability, *log_clutter);
         }
         const bool confirming = s.confirmed(track);
         if (track.held) {
@@ -907,7 +905,11 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
       if (options.confirm <= 1) r.fail("a provisional landmark, but every landmark is confirmed at once (confirm 1)");
       p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, options.confirm - 1));
     } else {
-      p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, std::numeric_limits<int>::max()));
+      // Seen once a scan at most, from its first scan to `window` scans after it.
+      // (A merge adds two counts, capped at `confirm`.)
+      const std::int64_t most = std::min<std::int64_t>(std::max<std::int64_t>(std::int64_t{options.window} + 1, options.confirm),
+                                                       std::numeric_limits<int>::max());
+      p.sightings = static_cast<int>(r.i64In("provisional sightings", 1, most));
     }
     if (scored_state) p.score = r.f64("provisional score");
     // Provisional while its score is below the confirming threshold (associate() erases it there).

@@ -70,7 +70,7 @@ const std::array<AssociationOption, 15> kOptions = {{
      [](const AssociationOptions& o) { return formatReal(o.detection_probability); }},
     {"clutter-density", "clutter_density", Opt::Kind::Real, "", 0, 0, true,
      "with --confirm-rule score: false detections per unit of measurement space (per m rad for range-bearing; "
-     "0: estimated from the scans as the observations no landmark explained, per scan, over the footprint)",
+     "0: estimated from the scans as the observations no confirmed landmark explained, per scan, over the footprint)",
      [](AssociationOptions& o, std::string_view v) {
        o.clutter_density = parseReal("clutter-density", v, 0.0, 1e100, false);
      },

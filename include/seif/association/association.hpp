@@ -101,9 +101,10 @@ struct AssociationOptions {
   /// seen so far.
   double detection_probability = 0.9;
   /// Score: false detections per unit of measurement space (per m rad for range-bearing).
-  /// 0: estimated from the scans so far, as the observations no landmark explained (new
-  /// landmarks started, ambiguous ones dropped) per scan over the footprint's volume - an
-  /// upper bound, since new landmarks count as clutter there.
+  /// 0: estimated from the scans so far, as the observations no confirmed landmark explained
+  /// (new landmarks started, ambiguous ones dropped, sightings of provisional ones) per scan
+  /// over the footprint's volume - an upper bound, since a landmark's sightings before it is
+  /// confirmed count as clutter there.
   double clutter_density = 0.0;
   ProvisionalPlace provisional = ProvisionalPlace::Filter;
   /// Known: drop the observations the data names no landmark for (clutter in a simulated
@@ -138,8 +139,8 @@ std::optional<MarginalMode> parseGateMarginal(std::string_view s);
 /// table (seif.association_options()) come from; `attribute` names the AssociationOptions
 /// member (Python's attribute, the json key).
 struct AssociationOption {
-  /// Probability: a probability in [0, 1). Real: a non-negative number. Flag: true | false
-  /// (a bare flag).
+  /// Probability: a probability, in [0, 1) (detection-probability: in (0, 1)). Real: a
+  /// non-negative number. Flag: true | false (a bare flag).
   enum class Kind { Choice, Integer, Probability, Length, Real, Flag };
   std::string_view key;        ///< the flag, "accept-gate"
   std::string_view attribute;  ///< "accept"
