@@ -133,10 +133,9 @@ struct Associator::Impl {
   std::size_t refresh_cursor = 0;
   std::size_t scans = 0;  // steps with observations so far
   // ConfirmRule::Score: the sensor's footprint, the box in measurement space of every
-  // observation so far (empty: lo > hi), and the score's thresholds.
+  // observation so far (empty: lo > hi).
   Vec2 footprint_lo = Vec2::Constant(std::numeric_limits<double>::infinity());
   Vec2 footprint_hi = Vec2::Constant(-std::numeric_limits<double>::infinity());
-  double confirm_score = 0.0, delete_score = 0.0;
   std::size_t explained = 0;  // observations paired with a confirmed landmark so far
   std::vector<double> joint_gates;  // JCBB's chi-square(2k) gates (ScanProblem::joint_gates)
   // What the last scan's observations changed, for discardScan(): the counts and next id
@@ -159,7 +158,7 @@ struct Associator::Impl {
   /// Whether a new landmark starts provisional (count 1: confirmed at once).
   bool provisionalStart() const { return scored() || options.confirm > 1; }
   bool confirmed(const Provisional& p) const {
-    return scored() ? p.score >= confirm_score : p.sightings >= options.confirm;
+    return scored() ? p.score >= trackConfirmScore() : p.sightings >= options.confirm;
   }
   /// The footprint's volume in measurement space (0 while it is a point or a segment).
   double footprintVolume() const {
@@ -396,7 +395,7 @@ struct Associator::Impl {
   void expireProvisional(SlamFilter& filter, std::size_t scan) {
     std::vector<int> expired;
     for (const auto& [id, p] : provisional) {
-      const bool rejected = scored() && p.score <= delete_score;  // the track score's test
+      const bool rejected = scored() && p.score <= trackDeleteScore();  // the track score's test
       if (rejected || scan > p.born + static_cast<std::size_t>(options.window)) expired.push_back(id);
     }
     std::sort(expired.begin(), expired.end());
@@ -431,9 +430,6 @@ Associator::Associator(const AssociationOptions& options) : impl_(std::make_uniq
   impl_->accept_d2 = chi2(o.accept);
   impl_->new_d2 = chi2(o.new_landmark);
   impl_->merge_d2 = o.merge > 0.0 ? chi2(o.merge) : 0.0;
-  // Wald's thresholds for error probabilities alpha (confirming clutter) and beta (removing a landmark).
-  impl_->confirm_score = trackConfirmScore();
-  impl_->delete_score = trackDeleteScore();
 }
 
 Associator::~Associator() = default;
@@ -633,7 +629,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
             s.started.push_back(z.landmark);  // in the filter from this update on (if it takes it)
             Mat23 J_x;
             Mat2 J_y;
-            z.z = sensor.predict(x, p->second.mean, &J_x, &J_y);
+            z.z = sensor.predict(x, track.mean, &J_x, &J_y);
             const Mat2 R = J_y * track.covariance * J_y.transpose();
             z.noise = 0.5 * (R + R.transpose());
           }
@@ -913,7 +909,7 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
     }
     if (scored_state) p.score = r.f64("provisional score");
     // Provisional while its score is below the confirming threshold (associate() erases it there).
-    if (!std::isfinite(p.score) || (options.confirm_rule == ConfirmRule::Score && p.score >= s.confirm_score)) {
+    if (!std::isfinite(p.score) || (options.confirm_rule == ConfirmRule::Score && p.score >= trackConfirmScore())) {
       r.fail("provisional landmark " + std::to_string(id) + "'s track score is not finite or already confirms it");
     }
     p.held = r.u64Max("provisional held", 1) == 1;
