@@ -33,10 +33,11 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifStore& s) {
   out.fixed(s.mu_x_);
   out.fixed(s.robot_anchor_);
   out.count(s.nodes_.size());
-  for (const SeifStore::Node& n : s.nodes_) {
+  for (std::size_t a = 0; a < s.nodes_.size(); ++a) {
+    const SeifStore::Node& n = s.nodes_[a];
     out.fixed(n.H);
     out.fixed(n.b);
-    out.fixed(n.mu);
+    out.fixed(s.mu_[a]);
     out.fixed(n.anchor);
     out.fixed(n.bound);
     out.i64(n.active);
@@ -95,17 +96,18 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
   }
   s.nodes_.clear();
   s.nodes_.resize(nodes);
+  s.mu_.assign(nodes, Vec2::Zero());
   std::size_t link_ends = 0;
   for (std::size_t a = 0; a < nodes; ++a) {
     SeifStore::Node& n = s.nodes_[a];
     in.fixed("landmark information", n.H, true);
     if (!(n.H.diagonal().minCoeff() > 0.0)) in.fail("landmark information is not positive on its diagonal");
     in.fixed("landmark information vector", n.b, true);
-    in.fixed("landmark mean", n.mu, true);
+    in.fixed("landmark mean", s.mu_[a], true);
     if (in.version() >= 2) {
       in.fixed("landmark anchor", n.anchor, true);
     } else {
-      n.anchor = n.mu;
+      n.anchor = s.mu_[a];
     }
     if (in.version() >= 4) {  // older files: no bounds (SeifOptions::bounds off)
       in.fixed("landmark covariance bound", n.bound, true);
@@ -115,14 +117,12 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
     const std::size_t links = in.count("link count", kLinkBytes);
     n.links.reserve(links);
     for (std::size_t k = 0; k < links; ++k) {
-      SeifStore::Link l;
-      l.slot = static_cast<int>(in.i64In("linked slot", 0, size - 1));
-      if (static_cast<std::size_t>(l.slot) == a) in.fail("a landmark linked to itself");
-      if (std::any_of(n.links.begin(), n.links.end(), [&](const SeifStore::Link& o) { return o.slot == l.slot; })) {
-        in.fail("a link stored twice");
-      }
-      in.fixed("link information", l.H, true);
-      n.links.push_back(l);
+      const int slot = static_cast<int>(in.i64In("linked slot", 0, size - 1));
+      if (static_cast<std::size_t>(slot) == a) in.fail("a landmark linked to itself");
+      if (n.links.find(slot) < n.links.size()) in.fail("a link stored twice");
+      SeifStore::LinkBlock H;
+      in.fixed("link information", H, true);
+      n.links.push_back(slot, H);
     }
     link_ends += links;
   }

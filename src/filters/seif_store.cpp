@@ -76,7 +76,8 @@ SeifStore::Node& SeifStore::journal(int slot) {
   Journal& j = journal_;
   if (j.open && node.journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
     j.entries.push_back({slot, true, j.saved.size()});
-    j.saved.push_back({node.H, node.bound, node.b, node.mu, node.anchor, node.w, node.active, node.links.size()});
+    j.saved.push_back({node.H, node.bound, node.b, mu_[static_cast<std::size_t>(slot)], node.anchor, node.w, node.active,
+                       node.links.size()});
     node.journaled = j.id;
   }
   return node;
@@ -87,10 +88,10 @@ Vec2& SeifStore::writeMean(int slot) {
   Journal& j = journal_;
   if (j.open && node.journaled != j.id && node.mean_journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
     j.entries.push_back({slot, false, j.means_of.size()});
-    j.means_of.push_back(node.mu);
+    j.means_of.push_back(mu_[static_cast<std::size_t>(slot)]);
     node.mean_journaled = j.id;
   }
-  return node.mu;
+  return mu_[static_cast<std::size_t>(slot)];
 }
 
 void SeifStore::assignMean(int slot, const Vec2& mean) {
@@ -105,12 +106,12 @@ void SeifStore::assignMean(int slot, const Vec2& mean) {
 }
 
 SeifStore::LinkBlock& SeifStore::writeLink(int slot, std::size_t index) {
-  Link& l = nodes_[static_cast<std::size_t>(slot)].links[index];
+  LinkBlock& H = nodes_[static_cast<std::size_t>(slot)].links.block(index);
   Journal& j = journal_;
   // Saved on every change (restored latest first, so the earliest value wins): cheaper than
   // marking each link, and a step changes each link a few times at most.
-  if (j.open && static_cast<std::size_t>(slot) < j.nodes) j.saved_links.push_back({slot, index, l.H});
-  return l.H;
+  if (j.open && static_cast<std::size_t>(slot) < j.nodes) j.saved_links.push_back({slot, index, H});
+  return H;
 }
 
 void SeifStore::rollbackTransaction() {
@@ -118,13 +119,13 @@ void SeifStore::rollbackTransaction() {
   Journal& j = journal_;
   if (!j.open) return;
   if (j.means_saved) {
-    for (std::size_t s = 0; s < j.nodes; ++s) nodes_[s].mu = j.means[s];
+    std::copy(j.means.begin(), j.means.begin() + static_cast<std::ptrdiff_t>(j.nodes), mu_.begin());
   }
   // Latest first, so that each field ends at its earliest saved value; the link values
   // before the nodes, whose restore drops the links the step added.
   for (std::size_t k = j.saved_links.size(); k-- > 0;) {
     const Journal::SavedLink& l = j.saved_links[k];
-    nodes_[static_cast<std::size_t>(l.slot)].links[l.index].H = l.H;
+    nodes_[static_cast<std::size_t>(l.slot)].links.block(l.index) = l.H;
   }
   for (std::size_t k = j.entries.size(); k-- > 0;) {
     const Journal::Entry& e = j.entries[k];
@@ -134,13 +135,13 @@ void SeifStore::rollbackTransaction() {
       node.H = n.H;
       node.bound = n.bound;
       node.b = n.b;
-      node.mu = n.mu;
+      mu_[static_cast<std::size_t>(e.slot)] = n.mu;
       node.anchor = n.anchor;
       node.w = n.w;
       node.active = n.active;
-      node.links.resize(n.links_count);  // only shrinks: links grow at the end within a step
+      node.links.truncate(n.links_count);  // links grow at the end within a step
     } else {
-      node.mu = j.means_of[e.index];
+      mu_[static_cast<std::size_t>(e.slot)] = j.means_of[e.index];
     }
   }
   for (int slot : coarse_dirty_) {  // clean at beginTransaction(): their saved w is the sums'
@@ -152,6 +153,7 @@ void SeifStore::rollbackTransaction() {
   coarse_Vx_ = j.coarse_Vx;
   coarse_A_ = j.coarse_A;
   nodes_.resize(j.nodes);
+  mu_.resize(j.nodes);
   ids_.resize(j.ids);
   H_xx_ = j.H_xx;
   b_x_ = j.b_x;
@@ -172,18 +174,14 @@ void SeifStore::requireNoTransaction(const char* what) const {
 // ---------------------------------------------------------------- links ---------------
 
 SeifStore::LinkBlock* SeifStore::link(int a, int c) {
-  const std::vector<Link>& links = write(a).links;
-  for (std::size_t i = 0; i < links.size(); ++i) {
-    if (links[i].slot == c) return &writeLink(a, i);
-  }
-  return nullptr;
+  const std::size_t i = write(a).links.find(c);
+  return i < node(a).links.size() ? &writeLink(a, i) : nullptr;
 }
 
 const SeifStore::LinkBlock* SeifStore::findLink(int a, int c) const {
-  for (const Link& l : node(a).links) {
-    if (l.slot == c) return &l.H;
-  }
-  return nullptr;
+  const LinkList& links = node(a).links;
+  const std::size_t i = links.find(c);
+  return i < links.size() ? &links.block(i) : nullptr;
 }
 
 void SeifStore::addToLink(int a, int c, const Mat2& H_ac) {
@@ -198,8 +196,8 @@ void SeifStore::addToLink(int a, int c, const Mat2& H_ac) {
 void SeifStore::addLink(int a, int c, const Mat2& H_ac) {
   Node& na = write(a);
   Node& nc = write(c);
-  na.links.push_back({c, H_ac});
-  nc.links.push_back({a, H_ac.transpose()});
+  na.links.push_back(c, H_ac);
+  nc.links.push_back(a, H_ac.transpose());
   ++landmark_links_;
   max_landmark_links_ = std::max({max_landmark_links_, na.links.size() + (na.active >= 0 ? 1 : 0),
                                   nc.links.size() + (nc.active >= 0 ? 1 : 0)});
@@ -211,7 +209,7 @@ int SeifStore::addLandmark(int id, const Vec2& mu) {
   nodes_.emplace_back();
   Node& n = nodes_.back();
   n.ref = mu;
-  n.mu = storedMean(mu, mu);
+  mu_.push_back(storedMean(mu, mu));
   n.anchor = mu;
   if (coarse_) {  // its terms are zero until settleCoarse() adds them
     n.coarse_dirty = true;
@@ -236,17 +234,19 @@ Vec2 quarterTurn(const Vec2& v) { return Vec2(-v.y(), v.x()); }
 /// each link's additions wait for the previous link's (a relaxation's ~130 links are then
 /// bound by the adder's latency, not its throughput).
 template <typename MeanOf>
-Vec2 linkSum(const std::vector<SeifStore::Link>& links, const MeanOf& m) {
+Vec2 linkSum(const LinkList& links, const MeanOf& m) {
   Vec2 s0 = Vec2::Zero(), s1 = Vec2::Zero(), s2 = Vec2::Zero(), s3 = Vec2::Zero();
   const std::size_t n = links.size();
+  const int* slot = links.slots().data();
+  const LinkList::Block* H = links.blocks();
   std::size_t e = 0;
   for (; e + 4 <= n; e += 4) {
-    s0.noalias() += links[e].H * m(links[e].slot);
-    s1.noalias() += links[e + 1].H * m(links[e + 1].slot);
-    s2.noalias() += links[e + 2].H * m(links[e + 2].slot);
-    s3.noalias() += links[e + 3].H * m(links[e + 3].slot);
+    s0.noalias() += H[e] * m(slot[e]);
+    s1.noalias() += H[e + 1] * m(slot[e + 1]);
+    s2.noalias() += H[e + 2] * m(slot[e + 2]);
+    s3.noalias() += H[e + 3] * m(slot[e + 3]);
   }
-  for (; e < n; ++e) s0.noalias() += links[e].H * m(links[e].slot);
+  for (; e < n; ++e) s0.noalias() += H[e] * m(slot[e]);
   return (s0 + s1) + (s2 + s3);
 }
 }  // namespace
@@ -391,7 +391,7 @@ void SeifStore::mergeLandmarks(int keep, int drop) {
   }
   nodes_[static_cast<std::size_t>(keep)].b += d.b;
   for (const Link& l : d.links) {
-    if (l.slot != keep) addToLink(keep, l.slot, l.H);
+    if (l.slot != keep) addToLink(keep, l.slot, Mat2(l.H));
   }
   if (d.active >= 0) {
     const RobotLink& r = robot_links_[static_cast<std::size_t>(d.active)];
@@ -413,8 +413,8 @@ void SeifStore::deleteLandmark(int slot) {
   // Unlink it from its neighbours and the robot.
   for (const Link& l : nodes_[static_cast<std::size_t>(slot)].links) {
     touchCoarse(l.slot);
-    std::vector<Link>& back = nodes_[static_cast<std::size_t>(l.slot)].links;
-    back.erase(std::find_if(back.begin(), back.end(), [&](const Link& b) { return b.slot == slot; }));
+    LinkList& back = nodes_[static_cast<std::size_t>(l.slot)].links;
+    back.erase(back.find(slot));
     --landmark_links_;
   }
   if (nodes_[static_cast<std::size_t>(slot)].active >= 0) removeRobotLink(slot);
@@ -425,16 +425,17 @@ void SeifStore::deleteLandmark(int slot) {
   const int last = size() - 1;
   if (slot != last) {
     nodes_[static_cast<std::size_t>(slot)] = std::move(nodes_.back());
+    mu_[static_cast<std::size_t>(slot)] = mu_.back();
     ids_[static_cast<std::size_t>(slot)] = ids_.back();
     Node& moved = nodes_[static_cast<std::size_t>(slot)];
     for (const Link& l : moved.links) {
-      for (Link& b : nodes_[static_cast<std::size_t>(l.slot)].links) {
-        if (b.slot == last) b.slot = slot;
-      }
+      LinkList& back = nodes_[static_cast<std::size_t>(l.slot)].links;
+      back.setSlot(back.find(last), slot);
     }
     if (moved.active >= 0) robot_links_[static_cast<std::size_t>(moved.active)].slot = slot;
   }
   nodes_.pop_back();
+  mu_.pop_back();
   ids_.pop_back();
 }
 
@@ -450,12 +451,12 @@ void SeifStore::detachRobot(const Vec3& mu_x) {
 void SeifStore::setMean(const Eigen::VectorXd& mu) {
   if (journal_.open && !journal_.means_saved) {  // O(N), as the exact mean that calls it
     journal_.means.resize(journal_.nodes);
-    for (std::size_t s = 0; s < journal_.nodes; ++s) journal_.means[s] = nodes_[s].mu;
+    std::copy(mu_.begin(), mu_.begin() + static_cast<std::ptrdiff_t>(journal_.nodes), journal_.means.begin());
     journal_.means_saved = true;
   }
   mu_x_ = mu.head<3>();
   frame_.setZero();
-  for (int s = 0; s < size(); ++s) nodes_[static_cast<std::size_t>(s)].mu = mu.segment<2>(StateLayout::landmark(s));
+  for (int s = 0; s < size(); ++s) mu_[static_cast<std::size_t>(s)] = mu.segment<2>(StateLayout::landmark(s));
   if (coarse_) enableCoarse();  // the sums again, O(N) as this
 }
 
@@ -501,9 +502,10 @@ using BlockLinks = std::array<BlockLink, kMaxLocalLandmarks + 1>;  // one spare:
 /// cost more than the loop's loads).
 int linksInBlock(const std::vector<int>& positions, const SeifStore::Node& node, int after, BlockLinks& out) {
   int count = 0;
-  const int n = static_cast<int>(node.links.size());
+  const std::span<const int> slots = node.links.slots();
+  const int n = static_cast<int>(slots.size());
   for (int e = 0; e < n; ++e) {
-    const int j = positions[static_cast<std::size_t>(node.links[static_cast<std::size_t>(e)].slot)];
+    const int j = positions[static_cast<std::size_t>(slots[static_cast<std::size_t>(e)])];
     out[static_cast<std::size_t>(count)] = {e, j};
     count += j > after ? 1 : 0;
     // At most one link per other gathered landmark; never taken, so never mispredicted.
@@ -600,7 +602,7 @@ void SeifStore::gatherListed() {
     const int in_block = linksInBlock(block_position_, n_a, i, block_links);
     for (int e = 0; e < in_block; ++e) {
       const BlockLink& bl = block_links[static_cast<std::size_t>(e)];
-      const LinkBlock& H_ac = n_a.links[static_cast<std::size_t>(bl.index)].H;
+      const LinkBlock& H_ac = n_a.links.block(static_cast<std::size_t>(bl.index));
       const int c = 3 + 2 * bl.position;
       local_H_.block<2, 2>(r, c) = H_ac;
       local_H_.block<2, 2>(c, r) = H_ac.transpose();
@@ -641,7 +643,7 @@ void SeifStore::scatter() {
       if (row_kept[a]) row_change[a].noalias() += (local_H_.block<2, 2>(r, r) - node.H) * basis[a];
       node.H = local_H_.block<2, 2>(r, r);
       node.b = local_b_.segment<2>(r);
-      node.mu = storedMean(local_mu_.segment<2>(r), node.ref);
+      mu_[static_cast<std::size_t>(gathered_[a])] = storedMean(local_mu_.segment<2>(r), node.ref);
       if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
       const int in_block = linksInBlock(block_position_, node, -1, block_links);
       for (int m = 0; m < in_block; ++m) {
@@ -703,7 +705,7 @@ void SeifStore::relaxLandmark(int slot, double omega) {
     // sum_j H_ij (mu_j + V_j beta) = sum_j H_ij mu_j + (w_i - H_ii V_i) beta with the kept
     // row w_i = H_ii V_i + sum_j H_ij V_j (seif_store_coarse.cpp): the links read mu alone.
     rhs.noalias() -= (node.w - node.H * landmarkBasis(node.ref)) * frame_;
-    rhs -= linkSum(node.links, [this](int j) -> const Vec2& { return nodes_[static_cast<std::size_t>(j)].mu; });
+    rhs -= linkSum(node.links, [this](int j) -> const Vec2& { return mu_[static_cast<std::size_t>(j)]; });
   } else {
     rhs -= linkSum(node.links, [this](int j) { return mean(j); });
   }
@@ -730,7 +732,7 @@ bool SeifStore::cacheResident() const {
   // The nodes and their links within a few MiB: Victoria Park's map (400 landmarks, 130 links
   // each, 2.3 MB) relaxes 10 % faster without the prefetches; the bench's 10^5 and 10^6 need them.
   constexpr std::size_t kResidentBytes = std::size_t{4} << 20;
-  return nodes_.size() * sizeof(Node) + 2 * landmark_links_ * sizeof(Link) <= kResidentBytes;
+  return nodes_.size() * sizeof(Node) + 2 * landmark_links_ * (sizeof(int) + sizeof(LinkBlock)) <= kResidentBytes;
 }
 
 void SeifStore::relaxLandmarks(std::span<const int> slots, double omega) {
@@ -739,13 +741,15 @@ void SeifStore::relaxLandmarks(std::span<const int> slots, double omega) {
     return;
   }
   for (int s : slots) {  // round 2: their links (round 1, the nodes: prefetch())
-    const std::vector<Link>& links = node(s).links;
-    const char* begin = reinterpret_cast<const char*>(links.data());
-    const char* end = reinterpret_cast<const char*>(links.data() + links.size());
-    for (const char* p = begin; p < end; p += 64) __builtin_prefetch(p);
+    const LinkList& links = node(s).links;
+    const auto prefetch = [](const void* from, const void* to) {
+      for (const char* p = static_cast<const char*>(from); p < static_cast<const char*>(to); p += 64) __builtin_prefetch(p);
+    };
+    prefetch(links.slots().data(), links.slots().data() + links.size());
+    prefetch(links.blocks(), links.blocks() + links.size());
   }
   for (int s : slots) {  // round 3: their neighbours' means
-    for (const Link& l : node(s).links) __builtin_prefetch(&node(l.slot).mu);
+    for (int j : node(s).links.slots()) __builtin_prefetch(&mu_[static_cast<std::size_t>(j)]);
   }
   for (int s : slots) relaxLandmark(s, omega);
 }

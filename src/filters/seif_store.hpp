@@ -8,6 +8,7 @@
 #include "filters/fixed_part_solver.hpp"
 #include "filters/information_ops.hpp"
 #include "filters/landmark_book.hpp"
+#include "filters/seif_links.hpp"
 #include <seif/filters/slam_filter.hpp>
 
 #include <Eigen/SparseCore>
@@ -19,24 +20,19 @@ namespace seif {
 
 class SeifStore {
  public:
-  // A link's block unaligned: 40 bytes a link instead of 48 (the relaxation streams them).
-  using LinkBlock = Eigen::Matrix<double, 2, 2, Eigen::DontAlign>;
-  struct Link {
-    int slot;
-    LinkBlock H;  // H_{this, other}
-  };
+  using LinkBlock = LinkList::Block;
+  using Link = LinkList::Ref;  // {slot, H_{this, other}}, what iterating a node's links yields
   struct RobotLink {
     int slot;
     Mat32 H;         // H_{x, landmark}
     long last_seen;  // step() of its last observation
   };
-  // The fields are ordered by when they are read. The first 48 bytes hold what a neighbour's
-  // visit reads (mu, ref: mean() is mu plus the frame offset at ref; active); with
-  // H and what relaxing the node itself adds (b, links) they fill the first 120, and with the
-  // coarse level's row (relaxLandmark() reads it with SeifOptions::coarse) the first 176;
-  // the bound, used only with SeifOptions::bounds, comes last.
+  // A landmark's blocks and links; its mean is the store's (rawMean(): a relaxation reads its
+  // ~10^2 neighbours' means, kept contiguous by slot). The fields are ordered by when they are
+  // read: with H and what relaxing the node itself adds (b, links) the first 128 bytes, and
+  // with the coarse level's row (relaxLandmark() reads it with SeifOptions::coarse) the first
+  // 176; the bound, used only with SeifOptions::bounds, comes last.
   struct Node {
-    Vec2 mu = Vec2::Zero();
     // The mean's coarse level (enableCoarse(); seif_store_coarse.cpp): where its rigid
     // motions are taken (its mean when it entered).
     Vec2 ref = Vec2::Zero();
@@ -44,7 +40,7 @@ class SeifStore {
     long mean_journaled = -1;  // the transaction that saved its mean last
     Mat2 H = Mat2::Zero();
     Vec2 b = Vec2::Zero();
-    std::vector<Link> links;
+    LinkList links;
     // The coarse level's row of H V without the robot term, and whether that row is out of
     // the sums until settleCoarse().
     Mat23 w = Mat23::Zero();
@@ -69,11 +65,13 @@ class SeifStore {
   const Vec3& robotVector() const { return b_x_; }
   const Vec3& robotMean() const { return mu_x_; }
   const Node& node(int slot) const { return nodes_[static_cast<std::size_t>(slot)]; }
-  /// Landmark `slot`'s mean: Node::mu, plus the map's rigid correction when the coarse level
-  /// is on (Node::mu then holds the mean before the corrections since it was last written).
+  /// Landmark `slot`'s mean as stored: before the map's rigid corrections since it was last
+  /// written when the coarse level is on, else its mean.
+  const Vec2& rawMean(int slot) const { return mu_[static_cast<std::size_t>(slot)]; }
+  /// Landmark `slot`'s mean: rawMean(), plus the map's rigid correction when the coarse level
+  /// is on.
   Vec2 mean(int slot) const {
-    const Node& n = node(slot);
-    return coarse_ ? Vec2(n.mu + frameOffset(n.ref)) : n.mu;
+    return coarse_ ? Vec2(rawMean(slot) + frameOffset(node(slot).ref)) : rawMean(slot);
   }
   /// The active landmarks, in no particular order (removeRobotLink() swaps in the last).
   const std::vector<RobotLink>& robotLinks() const { return robot_links_; }
@@ -256,7 +254,7 @@ class SeifStore {
   Node& journal(int slot);
   /// b_slot += db, its coarse term V^T b kept current (O(1), no row recomputed).
   void addToVector(int slot, const Vec2& db);
-  /// nodes_[slot].mu for a change (the relaxations' only write): its mean saved first.
+  /// mu_[slot] for a change (the relaxations' only write): its mean saved first.
   Vec2& writeMean(int slot);
   /// The value of link `index` of landmark `slot` for a change (write(slot) first): its value
   /// saved first when a transaction is open.
@@ -304,6 +302,7 @@ class SeifStore {
   Vec2 robot_anchor_;
   std::vector<RobotLink> robot_links_;
   std::vector<Node> nodes_;
+  std::vector<Vec2> mu_;  // the landmarks' means by slot, as stored (rawMean())
   long step_ = 0;
   std::size_t blocks_touched_ = 0;
   std::size_t landmark_links_ = 0;      // landmark-landmark links (unordered pairs)
