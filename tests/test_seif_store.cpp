@@ -74,6 +74,32 @@ struct Fixture {
 
 }  // namespace
 
+// A landmark's links: slots and blocks stay paired, in order, through erase and truncate.
+TEST(LinkList, SlotsAndBlocksStayPairedInOrder) {
+  LinkList links;
+  for (int k = 0; k < 5; ++k) links.push_back(10 + k, LinkList::Block::Constant(static_cast<double>(k)));
+  links.erase(links.at(12));
+  links.setSlot(links.at(14), 7);
+  ASSERT_EQ(links.size(), 4u);
+  const std::vector<int> slots(links.slots().begin(), links.slots().end());
+  EXPECT_EQ(slots, (std::vector<int>{10, 11, 13, 7}));
+  const std::vector<double> values{0.0, 1.0, 3.0, 4.0};
+  std::size_t i = 0;
+  for (const LinkList::Ref l : links) {
+    EXPECT_EQ(l.slot, slots[i]);
+    EXPECT_EQ(l.H, LinkList::Block::Constant(values[i]));
+    EXPECT_EQ(&l.H, &links.block(i));
+    ++i;
+  }
+  EXPECT_EQ(i, links.size());
+  EXPECT_EQ(links.find(12), links.size());
+  EXPECT_THROW((void)links.at(12), std::logic_error);
+  links.truncate(2);
+  EXPECT_EQ(links.size(), 2u);
+  EXPECT_EQ(links.slot(1), 11);
+  EXPECT_EQ(links.block(1), LinkList::Block::Constant(1.0));
+}
+
 TEST(SeifStore, SparseInformationIsWhatWasAdded) {
   Fixture f(5);
   EXPECT_EQ(Eigen::MatrixXd(f.store.sparseInformation()), f.H);

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <span>
+#include <stdexcept>
 #include <vector>
 
 namespace seif {
@@ -52,6 +53,12 @@ class LinkList {
   std::size_t find(int slot) const {
     std::size_t i = 0;
     while (i < slots_.size() && slots_[i] != slot) ++i;
+    return i;
+  }
+  /// The position of the link to `slot`, which must exist (the other end of a stored link).
+  std::size_t at(int slot) const {
+    const std::size_t i = find(slot);
+    if (i == slots_.size()) throw std::logic_error("LinkList: a link without its reverse");
     return i;
   }
 

@@ -414,7 +414,7 @@ void SeifStore::deleteLandmark(int slot) {
   for (const Link& l : nodes_[static_cast<std::size_t>(slot)].links) {
     touchCoarse(l.slot);
     LinkList& back = nodes_[static_cast<std::size_t>(l.slot)].links;
-    back.erase(back.find(slot));
+    back.erase(back.at(slot));
     --landmark_links_;
   }
   if (nodes_[static_cast<std::size_t>(slot)].active >= 0) removeRobotLink(slot);
@@ -430,7 +430,7 @@ void SeifStore::deleteLandmark(int slot) {
     Node& moved = nodes_[static_cast<std::size_t>(slot)];
     for (const Link& l : moved.links) {
       LinkList& back = nodes_[static_cast<std::size_t>(l.slot)].links;
-      back.setSlot(back.find(last), slot);
+      back.setSlot(back.at(last), slot);
     }
     if (moved.active >= 0) robot_links_[static_cast<std::size_t>(moved.active)].slot = slot;
   }
