@@ -52,7 +52,9 @@ void addSimulateCommand(CLI::App& app) {
       "(Barcodes.dat, Landmark_Groundtruth.dat, Robot1_{Odometry,Measurement,Groundtruth}.dat)\n"
       "plus meta.json with the true noise, so `seif run` reads it like real data.\n"
       "Presets: paper (the paper's 50 landmarks in the unit square, 500 steps), uniform (the\n"
-      "paper's density over N landmarks), corridor (a long strip: the map grows steadily).\n"
+      "paper's density over N landmarks), corridor (a long strip: the map grows steadily), park\n"
+      "(a car-like vehicle among trees, a laser-like sensor, Victoria Park's scale and noise).\n"
+      "--clutter and --detection-probability add false and missed detections to any preset.\n"
       "See docs/simulator.md.");
   cmd->add_option("--preset", args->preset, "paper, uniform, corridor or park (an outdoor park at Victoria Park's scale)")
       ->check(CLI::IsMember({"paper", "uniform", "corridor", "park"}))
