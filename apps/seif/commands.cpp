@@ -27,6 +27,8 @@ int main(int argc, char** argv) {
       "  seif plot result                                         # draw it: result/map.png\n"
       "  seif run --dataset ../shared/data/mrclam/MRCLAM_Dataset6 --robot 3 --filter ekf --out r3\n"
       "  seif run --dataset ../shared/data/victoria-park --filter seif --out vp\n"
+      "  seif run --dataset ../shared/data/victoria-park --detections raw --association jcbb \\\n"
+      "           --filter seif:profile=consistent --out vp-raw     # ids unknown: associate\n"
       "  seif convert ../shared/data/victoria-park-isam/victoria_park.txt --to g2o --out vp.g2o\n"
       "  seif paper --runs 50 --out out/paper                     # the paper's experiment\n"
       "  seif consistency --preset paper --runs 50 --filters batch,ekf,seif --out out/nees\n"
