@@ -85,7 +85,7 @@ TEST_P(CoarseLevel, RelaxingALandmarkSolvesItsRowOfTheWholeMap) {
   const Eigen::VectorXd b = store.informationVector();
   const Eigen::VectorXd mu = store.mean();
   double offset = 0.0;  // the frame offset the stored means lack: the test is void without one
-  for (int slot = 0; slot < store.size(); ++slot) offset = std::max(offset, (store.mean(slot) - store.rawMean(slot)).norm());
+  for (int slot = 0; slot < store.size(); ++slot) offset = std::max(offset, (store.mean(slot) - store.node(slot).mu).norm());
   ASSERT_GT(offset, 1e-6);
   for (int slot = 0; slot < store.size(); slot += 3) {
     const Eigen::Index r = StateLayout::landmark(slot);

@@ -180,7 +180,7 @@ TEST(SeifStore, GatherScatterRoundTripIsExact) {
   EXPECT_EQ(*f.store.findLink(1, 4), Mat2::Identity());
   EXPECT_EQ(f.store.stats().links, 5u + 4u);
   EXPECT_EQ(f.store.robotVector()(0), 42.0);
-  EXPECT_EQ(f.store.rawMean(3)(0), -7.0);
+  EXPECT_EQ(f.store.node(3).mu(0), -7.0);
 }
 
 TEST(SeifStore, RemoveRobotLinkKeepsPositionsConsistent) {

@@ -47,7 +47,7 @@ int slotOf(int id) { return id >= 10 && id <= 12 ? id - 10 : -1; }
 TEST(RelaxFrontier, AMoveBeyondTheThresholdQueuesTheNeighboursOnce) {
   SeifStore store = chain();
   RelaxFrontier frontier(0.5, 10, 4);  // half a conditional sigma: 0.25 m here
-  for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.rawMean(s));
+  for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.node(s).mu);
   store.setMean(meanWith(store, 1, Vec2(1.2, 0.0)));  // 0.2 m: 0.4 sigma
   frontier.moved(store, 1);
   EXPECT_EQ(frontier.queued(), 0u);
@@ -72,7 +72,7 @@ TEST(RelaxFrontier, AMoveBeyondTheThresholdQueuesTheNeighboursOnce) {
 TEST(RelaxFrontier, ASpreadQueuesTheNeighboursWhateverTheMove) {
   SeifStore store = chain();
   RelaxFrontier frontier(0.5, 10, 4);
-  for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.rawMean(s));
+  for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.node(s).mu);
   frontier.moved(store, 1);  // it has not moved
   EXPECT_EQ(frontier.queued(), 0u);
   frontier.spread(store, 1);
@@ -84,7 +84,7 @@ TEST(RelaxFrontier, ASpreadQueuesTheNeighboursWhateverTheMove) {
 TEST(RelaxFrontier, ARemovedLandmarkIsSkippedAndTheMovedSlotKeepsItsState) {
   SeifStore store = chain();
   RelaxFrontier frontier(0.1, 10, 4);
-  for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.rawMean(s));
+  for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.node(s).mu);
   store.setMean(meanWith(store, 1, Vec2(1.0, 1.0)));
   frontier.moved(store, 1);  // queues 10 and 12
   ASSERT_EQ(frontier.queued(), 2u);
@@ -103,7 +103,7 @@ TEST(RelaxFrontier, ARemovedLandmarkIsSkippedAndTheMovedSlotKeepsItsState) {
 TEST(RelaxFrontier, RollbackRestoresTheQueueAndTheSpreadPoints) {
   SeifStore store = chain();
   RelaxFrontier frontier(0.1, 10, 4);
-  for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.rawMean(s));
+  for (int s = 0; s < store.size(); ++s) frontier.addLandmark(store.node(s).mu);
   store.setMean(meanWith(store, 0, Vec2(0.0, 1.0)));
   frontier.moved(store, 0);  // queues 11
   frontier.begin();

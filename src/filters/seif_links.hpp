@@ -39,16 +39,14 @@ class LinkList {
   };
 
   std::size_t size() const { return slots_.size(); }
-  bool empty() const { return slots_.empty(); }
   Iterator begin() const { return {*this, 0}; }
   Iterator end() const { return {*this, slots_.size()}; }
-  Ref operator[](std::size_t i) const { return {slots_[i], blocks_[i]}; }
   int slot(std::size_t i) const { return slots_[i]; }
   const Block& block(std::size_t i) const { return blocks_[i]; }
   Block& block(std::size_t i) { return blocks_[i]; }
   /// The other ends alone, in order (what a scan for a slot reads).
   std::span<const int> slots() const { return slots_; }
-  const Block* blocks() const { return blocks_.data(); }
+  std::span<const Block> blocks() const { return blocks_; }
   /// The position of the link to `slot`, or size() when there is none.
   std::size_t find(int slot) const {
     std::size_t i = 0;

@@ -41,16 +41,16 @@ void RelaxFrontier::save(int slot) {
 void RelaxFrontier::moved(const SeifStore& store, int slot) {
   const auto s = static_cast<std::size_t>(slot);
   const SeifStore::Node& node = store.node(slot);
-  // rawMean(), not mean(): the coarse level's rigid correction of the whole map moves no
+  // Node::mu, not mean(): the coarse level's rigid correction of the whole map moves no
   // landmark against its neighbours.
-  const Vec2 d = store.rawMean(slot) - spread_from_[s];
+  const Vec2 d = node.mu - spread_from_[s];
   if (d.dot(node.H * d) > threshold_ * threshold_) spread(store, slot);
 }
 
 void RelaxFrontier::spread(const SeifStore& store, int slot) {
   const SeifStore::Node& node = store.node(slot);
   save(slot);
-  spread_from_[static_cast<std::size_t>(slot)] = store.rawMean(slot);
+  spread_from_[static_cast<std::size_t>(slot)] = node.mu;
   for (const SeifStore::Link& l : node.links) {
     const auto n = static_cast<std::size_t>(l.slot);
     if (is_queued_[n]) continue;

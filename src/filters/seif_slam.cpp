@@ -196,7 +196,7 @@ bool SeifSlam::measurementUpdate(std::span<const Observation> observations, cons
   for (const PlannedObservation& p : plan) {
     if (p.first) {
       const int slot = store_.addLandmark(p.z->landmark, p.initial);
-      if (wildfire()) frontier_.addLandmark(store_.rawMean(slot));
+      if (wildfire()) frontier_.addLandmark(store_.node(slot).mu);
     }
     std::optional<Anchors> anchors;
     if (invariant) anchors = Anchors{store_.robotAnchor(), store_.node(p.slot).anchor};

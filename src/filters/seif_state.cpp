@@ -33,11 +33,10 @@ void CheckpointAccess::write(ArchiveWriter& out, const SeifStore& s) {
   out.fixed(s.mu_x_);
   out.fixed(s.robot_anchor_);
   out.count(s.nodes_.size());
-  for (std::size_t a = 0; a < s.nodes_.size(); ++a) {
-    const SeifStore::Node& n = s.nodes_[a];
+  for (const SeifStore::Node& n : s.nodes_) {
     out.fixed(n.H);
     out.fixed(n.b);
-    out.fixed(s.mu_[a]);
+    out.fixed(n.mu);
     out.fixed(n.anchor);
     out.fixed(n.bound);
     out.i64(n.active);
@@ -96,18 +95,17 @@ void CheckpointAccess::read(ArchiveReader& in, SeifStore& s) {
   }
   s.nodes_.clear();
   s.nodes_.resize(nodes);
-  s.mu_.assign(nodes, Vec2::Zero());
   std::size_t link_ends = 0;
   for (std::size_t a = 0; a < nodes; ++a) {
     SeifStore::Node& n = s.nodes_[a];
     in.fixed("landmark information", n.H, true);
     if (!(n.H.diagonal().minCoeff() > 0.0)) in.fail("landmark information is not positive on its diagonal");
     in.fixed("landmark information vector", n.b, true);
-    in.fixed("landmark mean", s.mu_[a], true);
+    in.fixed("landmark mean", n.mu, true);
     if (in.version() >= 2) {
       in.fixed("landmark anchor", n.anchor, true);
     } else {
-      n.anchor = s.mu_[a];
+      n.anchor = n.mu;
     }
     if (in.version() >= 4) {  // older files: no bounds (SeifOptions::bounds off)
       in.fixed("landmark covariance bound", n.bound, true);

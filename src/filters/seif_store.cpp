@@ -76,8 +76,7 @@ SeifStore::Node& SeifStore::journal(int slot) {
   Journal& j = journal_;
   if (j.open && node.journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
     j.entries.push_back({slot, true, j.saved.size()});
-    j.saved.push_back({node.H, node.bound, node.b, mu_[static_cast<std::size_t>(slot)], node.anchor, node.w, node.active,
-                       node.links.size()});
+    j.saved.push_back({node.H, node.bound, node.b, node.mu, node.anchor, node.w, node.active, node.links.size()});
     node.journaled = j.id;
   }
   return node;
@@ -88,10 +87,10 @@ Vec2& SeifStore::writeMean(int slot) {
   Journal& j = journal_;
   if (j.open && node.journaled != j.id && node.mean_journaled != j.id && static_cast<std::size_t>(slot) < j.nodes) {
     j.entries.push_back({slot, false, j.means_of.size()});
-    j.means_of.push_back(mu_[static_cast<std::size_t>(slot)]);
+    j.means_of.push_back(node.mu);
     node.mean_journaled = j.id;
   }
-  return mu_[static_cast<std::size_t>(slot)];
+  return node.mu;
 }
 
 void SeifStore::assignMean(int slot, const Vec2& mean) {
@@ -119,7 +118,7 @@ void SeifStore::rollbackTransaction() {
   Journal& j = journal_;
   if (!j.open) return;
   if (j.means_saved) {
-    std::copy(j.means.begin(), j.means.begin() + static_cast<std::ptrdiff_t>(j.nodes), mu_.begin());
+    for (std::size_t s = 0; s < j.nodes; ++s) nodes_[s].mu = j.means[s];
   }
   // Latest first, so that each field ends at its earliest saved value; the link values
   // before the nodes, whose restore drops the links the step added.
@@ -135,13 +134,13 @@ void SeifStore::rollbackTransaction() {
       node.H = n.H;
       node.bound = n.bound;
       node.b = n.b;
-      mu_[static_cast<std::size_t>(e.slot)] = n.mu;
+      node.mu = n.mu;
       node.anchor = n.anchor;
       node.w = n.w;
       node.active = n.active;
       node.links.truncate(n.links_count);  // links grow at the end within a step
     } else {
-      mu_[static_cast<std::size_t>(e.slot)] = j.means_of[e.index];
+      node.mu = j.means_of[e.index];
     }
   }
   for (int slot : coarse_dirty_) {  // clean at beginTransaction(): their saved w is the sums'
@@ -153,7 +152,6 @@ void SeifStore::rollbackTransaction() {
   coarse_Vx_ = j.coarse_Vx;
   coarse_A_ = j.coarse_A;
   nodes_.resize(j.nodes);
-  mu_.resize(j.nodes);
   ids_.resize(j.ids);
   H_xx_ = j.H_xx;
   b_x_ = j.b_x;
@@ -174,8 +172,9 @@ void SeifStore::requireNoTransaction(const char* what) const {
 // ---------------------------------------------------------------- links ---------------
 
 SeifStore::LinkBlock* SeifStore::link(int a, int c) {
-  const std::size_t i = write(a).links.find(c);
-  return i < node(a).links.size() ? &writeLink(a, i) : nullptr;
+  const LinkList& links = write(a).links;
+  const std::size_t i = links.find(c);
+  return i < links.size() ? &writeLink(a, i) : nullptr;
 }
 
 const SeifStore::LinkBlock* SeifStore::findLink(int a, int c) const {
@@ -209,7 +208,7 @@ int SeifStore::addLandmark(int id, const Vec2& mu) {
   nodes_.emplace_back();
   Node& n = nodes_.back();
   n.ref = mu;
-  mu_.push_back(storedMean(mu, mu));
+  n.mu = storedMean(mu, mu);
   n.anchor = mu;
   if (coarse_) {  // its terms are zero until settleCoarse() adds them
     n.coarse_dirty = true;
@@ -238,7 +237,7 @@ Vec2 linkSum(const LinkList& links, const MeanOf& m) {
   Vec2 s0 = Vec2::Zero(), s1 = Vec2::Zero(), s2 = Vec2::Zero(), s3 = Vec2::Zero();
   const std::size_t n = links.size();
   const int* slot = links.slots().data();
-  const LinkList::Block* H = links.blocks();
+  const LinkList::Block* H = links.blocks().data();
   std::size_t e = 0;
   for (; e + 4 <= n; e += 4) {
     s0.noalias() += H[e] * m(slot[e]);
@@ -391,7 +390,7 @@ void SeifStore::mergeLandmarks(int keep, int drop) {
   }
   nodes_[static_cast<std::size_t>(keep)].b += d.b;
   for (const Link& l : d.links) {
-    if (l.slot != keep) addToLink(keep, l.slot, Mat2(l.H));
+    if (l.slot != keep) addToLink(keep, l.slot, l.H);
   }
   if (d.active >= 0) {
     const RobotLink& r = robot_links_[static_cast<std::size_t>(d.active)];
@@ -425,7 +424,6 @@ void SeifStore::deleteLandmark(int slot) {
   const int last = size() - 1;
   if (slot != last) {
     nodes_[static_cast<std::size_t>(slot)] = std::move(nodes_.back());
-    mu_[static_cast<std::size_t>(slot)] = mu_.back();
     ids_[static_cast<std::size_t>(slot)] = ids_.back();
     Node& moved = nodes_[static_cast<std::size_t>(slot)];
     for (const Link& l : moved.links) {
@@ -435,7 +433,6 @@ void SeifStore::deleteLandmark(int slot) {
     if (moved.active >= 0) robot_links_[static_cast<std::size_t>(moved.active)].slot = slot;
   }
   nodes_.pop_back();
-  mu_.pop_back();
   ids_.pop_back();
 }
 
@@ -451,12 +448,12 @@ void SeifStore::detachRobot(const Vec3& mu_x) {
 void SeifStore::setMean(const Eigen::VectorXd& mu) {
   if (journal_.open && !journal_.means_saved) {  // O(N), as the exact mean that calls it
     journal_.means.resize(journal_.nodes);
-    std::copy(mu_.begin(), mu_.begin() + static_cast<std::ptrdiff_t>(journal_.nodes), journal_.means.begin());
+    for (std::size_t s = 0; s < journal_.nodes; ++s) journal_.means[s] = nodes_[s].mu;
     journal_.means_saved = true;
   }
   mu_x_ = mu.head<3>();
   frame_.setZero();
-  for (int s = 0; s < size(); ++s) mu_[static_cast<std::size_t>(s)] = mu.segment<2>(StateLayout::landmark(s));
+  for (int s = 0; s < size(); ++s) nodes_[static_cast<std::size_t>(s)].mu = mu.segment<2>(StateLayout::landmark(s));
   if (coarse_) enableCoarse();  // the sums again, O(N) as this
 }
 
@@ -643,7 +640,7 @@ void SeifStore::scatter() {
       if (row_kept[a]) row_change[a].noalias() += (local_H_.block<2, 2>(r, r) - node.H) * basis[a];
       node.H = local_H_.block<2, 2>(r, r);
       node.b = local_b_.segment<2>(r);
-      mu_[static_cast<std::size_t>(gathered_[a])] = storedMean(local_mu_.segment<2>(r), node.ref);
+      node.mu = storedMean(local_mu_.segment<2>(r), node.ref);
       if (node.active >= 0) robot_links_[static_cast<std::size_t>(node.active)].H = local_H_.block<3, 2>(0, r);
       const int in_block = linksInBlock(block_position_, node, -1, block_links);
       for (int m = 0; m < in_block; ++m) {
@@ -705,7 +702,7 @@ void SeifStore::relaxLandmark(int slot, double omega) {
     // sum_j H_ij (mu_j + V_j beta) = sum_j H_ij mu_j + (w_i - H_ii V_i) beta with the kept
     // row w_i = H_ii V_i + sum_j H_ij V_j (seif_store_coarse.cpp): the links read mu alone.
     rhs.noalias() -= (node.w - node.H * landmarkBasis(node.ref)) * frame_;
-    rhs -= linkSum(node.links, [this](int j) -> const Vec2& { return mu_[static_cast<std::size_t>(j)]; });
+    rhs -= linkSum(node.links, [this](int j) -> const Vec2& { return nodes_[static_cast<std::size_t>(j)].mu; });
   } else {
     rhs -= linkSum(node.links, [this](int j) { return mean(j); });
   }
@@ -746,10 +743,10 @@ void SeifStore::relaxLandmarks(std::span<const int> slots, double omega) {
       for (const char* p = static_cast<const char*>(from); p < static_cast<const char*>(to); p += 64) __builtin_prefetch(p);
     };
     prefetch(links.slots().data(), links.slots().data() + links.size());
-    prefetch(links.blocks(), links.blocks() + links.size());
+    prefetch(links.blocks().data(), links.blocks().data() + links.size());
   }
   for (int s : slots) {  // round 3: their neighbours' means
-    for (int j : node(s).links.slots()) __builtin_prefetch(&mu_[static_cast<std::size_t>(j)]);
+    for (int j : node(s).links.slots()) __builtin_prefetch(&node(j).mu);
   }
   for (int s : slots) relaxLandmark(s, omega);
 }

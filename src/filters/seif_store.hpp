@@ -27,12 +27,13 @@ class SeifStore {
     Mat32 H;         // H_{x, landmark}
     long last_seen;  // step() of its last observation
   };
-  // A landmark's blocks and links; its mean is the store's (rawMean(): a relaxation reads its
-  // ~10^2 neighbours' means, kept contiguous by slot). The fields are ordered by when they are
-  // read: with H and what relaxing the node itself adds (b, links) the first 128 bytes, and
-  // with the coarse level's row (relaxLandmark() reads it with SeifOptions::coarse) the first
-  // 176; the bound, used only with SeifOptions::bounds, comes last.
+  // The fields are ordered by when they are read. The first 48 bytes hold what a neighbour's
+  // visit reads (mu, ref: mean() is mu plus the frame offset at ref; active); with
+  // H and what relaxing the node itself adds (b, links) they fill the first 144, and with the
+  // coarse level's row (relaxLandmark() reads it with SeifOptions::coarse) the first 192;
+  // the bound, used only with SeifOptions::bounds, comes last.
   struct Node {
+    Vec2 mu = Vec2::Zero();
     // The mean's coarse level (enableCoarse(); seif_store_coarse.cpp): where its rigid
     // motions are taken (its mean when it entered).
     Vec2 ref = Vec2::Zero();
@@ -65,13 +66,11 @@ class SeifStore {
   const Vec3& robotVector() const { return b_x_; }
   const Vec3& robotMean() const { return mu_x_; }
   const Node& node(int slot) const { return nodes_[static_cast<std::size_t>(slot)]; }
-  /// Landmark `slot`'s mean as stored: before the map's rigid corrections since it was last
-  /// written when the coarse level is on, else its mean.
-  const Vec2& rawMean(int slot) const { return mu_[static_cast<std::size_t>(slot)]; }
-  /// Landmark `slot`'s mean: rawMean(), plus the map's rigid correction when the coarse level
-  /// is on.
+  /// Landmark `slot`'s mean: Node::mu, plus the map's rigid correction when the coarse level
+  /// is on (Node::mu then holds the mean before the corrections since it was last written).
   Vec2 mean(int slot) const {
-    return coarse_ ? Vec2(rawMean(slot) + frameOffset(node(slot).ref)) : rawMean(slot);
+    const Node& n = node(slot);
+    return coarse_ ? Vec2(n.mu + frameOffset(n.ref)) : n.mu;
   }
   /// The active landmarks, in no particular order (removeRobotLink() swaps in the last).
   const std::vector<RobotLink>& robotLinks() const { return robot_links_; }
@@ -254,7 +253,7 @@ class SeifStore {
   Node& journal(int slot);
   /// b_slot += db, its coarse term V^T b kept current (O(1), no row recomputed).
   void addToVector(int slot, const Vec2& db);
-  /// mu_[slot] for a change (the relaxations' only write): its mean saved first.
+  /// nodes_[slot].mu for a change (the relaxations' only write): its mean saved first.
   Vec2& writeMean(int slot);
   /// The value of link `index` of landmark `slot` for a change (write(slot) first): its value
   /// saved first when a transaction is open.
@@ -302,7 +301,6 @@ class SeifStore {
   Vec2 robot_anchor_;
   std::vector<RobotLink> robot_links_;
   std::vector<Node> nodes_;
-  std::vector<Vec2> mu_;  // the landmarks' means by slot, as stored (rawMean())
   long step_ = 0;
   std::size_t blocks_touched_ = 0;
   std::size_t landmark_links_ = 0;      // landmark-landmark links (unordered pairs)

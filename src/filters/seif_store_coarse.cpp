@@ -110,7 +110,7 @@ void SeifStore::enableCoarse() {
     coarse_ = true;
     coarse_dirty_.reserve(1024);  // a step's changed rows: no allocation in the steady state
     coarse_origin_ = mu_x_.head<2>();
-    for (std::size_t s = 0; s < nodes_.size(); ++s) nodes_[s].ref = mu_[s];  // frame_ is zero: mu is the mean
+    for (Node& n : nodes_) n.ref = n.mu;  // frame_ is zero: mu is the mean
   }
   coarse_Vx_ = robotBasis();
   coarse_g_.setZero();
