@@ -419,14 +419,24 @@ TEST(CheckpointCorpus, SeedsLoadAndRegressionsAreRefused) {
   // The associator's state a run's checkpoint carries (Associator::saveState; written by
   // Associator.state_bytes() after 200 steps of the park with clutter, JCBB, held landmarks,
   // the track score). Version 1 (before the track score; the count, one false detection a
-  // scan) restores with the count's state and writes version 2.
+  // scan) restores with the count's state, and version 2 (the footprint a box) with its box;
+  // both write the current version.
   const auto read = [&root](const char* file) {
     std::ifstream in(root / "corpus" / "fuzz_checkpoint" / file, std::ios::binary);
     return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   };
-  const std::string associator = read("associator.state"), version1 = read("associator-v1.state");
+  const std::string associator = read("associator.state"), version1 = read("associator-v1.state"),
+                    version2 = read("associator-v2.state");
   ASSERT_GT(associator.size(), 1000u);
   ASSERT_GT(version1.size(), 1000u);
+  ASSERT_GT(version2.size(), 1000u);
+  {
+    const Associator v2 = Associator::restoreState(version2, "associator-v2.state");
+    EXPECT_EQ(v2.options().confirm_rule, ConfirmRule::Score);
+    const std::string rewritten = v2.saveState();
+    EXPECT_FALSE(rewritten == version2);
+    EXPECT_TRUE(Associator::restoreState(rewritten, "rewritten").saveState() == rewritten);
+  }
   EXPECT_TRUE(Associator::restoreState(associator, "associator.state").saveState() == associator);
   const Associator old = Associator::restoreState(version1, "associator-v1.state");
   EXPECT_EQ(old.options().confirm_rule, ConfirmRule::Count);

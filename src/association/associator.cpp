@@ -4,6 +4,7 @@
 #include <seif/core/errors.hpp>
 #include <seif/association/association.hpp>
 #include "association/candidate_grid.hpp"
+#include "association/footprint.hpp"
 #include "association/scan.hpp"
 #include "association/track_score.hpp"
 #include "core/binary_archive.hpp"
@@ -132,10 +133,9 @@ struct Associator::Impl {
   std::vector<int> started;  // landmarks the last scan started in the filter
   std::size_t refresh_cursor = 0;
   std::size_t scans = 0;  // steps with observations so far
-  // ConfirmRule::Score: the sensor's footprint, the box in measurement space of every
-  // observation so far (empty: lo > hi).
-  Vec2 footprint_lo = Vec2::Constant(std::numeric_limits<double>::infinity());
-  Vec2 footprint_hi = Vec2::Constant(-std::numeric_limits<double>::infinity());
+  // ConfirmRule::Score: the sensor's footprint, where in measurement space the observations
+  // so far lie (footprint.hpp).
+  SensorFootprint footprint;
   std::size_t explained = 0;  // observations paired with a confirmed landmark so far
   std::vector<double> joint_gates;  // JCBB's chi-square(2k) gates (ScanProblem::joint_gates)
   // What the last scan's observations changed, for discardScan(): the counts and next id
@@ -151,7 +151,7 @@ struct Associator::Impl {
     std::unordered_set<int> recorded;  // the ids in `provisional`
     std::vector<std::pair<int, int>> tallies;
     std::size_t touched = 0, started = 0;
-    Vec2 footprint_lo = Vec2::Zero(), footprint_hi = Vec2::Zero();
+    SensorFootprint footprint;
   } scan_record;
 
   bool scored() const { return options.confirm_rule == ConfirmRule::Score; }
@@ -159,14 +159,6 @@ struct Associator::Impl {
   bool provisionalStart() const { return scored() || options.confirm > 1; }
   bool confirmed(const Provisional& p) const {
     return scored() ? p.score >= trackConfirmScore() : p.sightings >= options.confirm;
-  }
-  /// The footprint's volume in measurement space (0 while it is a point or a segment).
-  double footprintVolume() const {
-    const Vec2 extent = (footprint_hi - footprint_lo).cwiseMax(0.0);
-    return extent.prod();
-  }
-  bool inFootprint(const Vec2& z) const {
-    return (z.array() >= footprint_lo.array()).all() && (z.array() <= footprint_hi.array()).all();
   }
 
   void recordProvisional(int id) {
@@ -201,8 +193,7 @@ struct Associator::Impl {
     next_id = scan_record.next_id;
     touched.resize(scan_record.touched);
     started.resize(scan_record.started);
-    footprint_lo = scan_record.footprint_lo;
-    footprint_hi = scan_record.footprint_hi;
+    footprint = scan_record.footprint;
     // `explained` stays, as counts.observations and scans do: the clutter estimate's ratio.
   }
 
@@ -330,13 +321,13 @@ struct Associator::Impl {
   /// or the observations so far that no confirmed landmark explained, per scan, over the
   /// footprint's volume (an upper bound: a landmark's sightings before it is confirmed count
   /// as clutter). None while the footprint has no volume (the scan then changes no score).
-  std::optional<double> scanClutter(const std::vector<Observation>& observations, const std::vector<int>& pairing) {
+  std::optional<double> scanClutter(const MeasurementModel& sensor, const std::vector<Observation>& observations,
+                                    const std::vector<int>& pairing) {
     for (std::size_t i = 0; i < observations.size(); ++i) {
-      footprint_lo = footprint_lo.cwiseMin(observations[i].z);
-      footprint_hi = footprint_hi.cwiseMax(observations[i].z);
+      footprint.add(sensor, observations[i].z);
       if (pairing[i] >= 0 && provisional.count(pairing[i]) == 0) ++explained;
     }
-    const double volume = footprintVolume();
+    const double volume = footprint.volume();
     if (!(volume > 0.0) || !std::isfinite(volume)) return std::nullopt;
     double lambda = options.clutter_density;
     if (lambda == 0.0) {
@@ -357,7 +348,7 @@ struct Associator::Impl {
     for (auto& [id, p] : provisional) {
       if (p.born == scans || seen.count(id) > 0) continue;
       const Vec2 y = p.held ? p.mean : filter.landmark(id);
-      if (!inFootprint(sensor.predict(x, y))) continue;
+      if (!footprint.contains(sensor, sensor.predict(x, y))) continue;
       recordProvisional(id);
       p.score += miss;
     }
@@ -601,9 +592,8 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   record.tallies.clear();
   record.touched = s.touched.size();
   record.started = s.started.size();
-  record.footprint_lo = s.footprint_lo;
-  record.footprint_hi = s.footprint_hi;
-  const std::optional<double> log_clutter = s.scored() ? s.scanClutter(observations, pairing) : std::nullopt;
+  record.footprint = s.footprint;
+  const std::optional<double> log_clutter = s.scored() ? s.scanClutter(sensor, observations, pairing) : std::nullopt;
   std::vector<Observation> kept;
   kept.reserve(observations.size());
   for (std::size_t i = 0; i < observations.size(); ++i) {
@@ -755,7 +745,8 @@ void writeIds(ArchiveWriter& w, const std::vector<int>& ids) {
   for (int id : ids) w.i64(id);
 }
 
-constexpr std::string_view kStateSection = "associator v2";
+// Version 3: the footprint as intervals per axis (footprint.hpp) instead of a box.
+constexpr std::string_view kStateSection = "associator v3";
 
 int readId(ArchiveReader& r, const char* what) {
   return static_cast<int>(r.i64In(what, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
@@ -821,8 +812,7 @@ std::string Associator::saveState() const {
   writeIds(w, s.started);
   w.u64(s.refresh_cursor);
   w.u64(s.scans);
-  w.fixed(s.footprint_lo);
-  w.fixed(s.footprint_hi);
+  s.footprint.save(w);
   w.u64(s.explained);
   return w.bytes();
 }
@@ -831,13 +821,20 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
   ArchiveReader r(bytes, name);
   // Version 2 added the track score (each provisional landmark's score, the footprint, the
   // explained observations); a version-1 state restores with none of them (its rule: count).
-  bool scored_state = true;
+  // Version 3 holds the footprint as intervals; a version-2 box becomes one per axis.
+  int version = 3;
   try {
     r.section(kStateSection);
   } catch (const DataError&) {
-    r.section("associator");
-    scored_state = false;
+    try {
+      r.section("associator v2");
+      version = 2;
+    } catch (const DataError&) {
+      r.section("associator");
+      version = 1;
+    }
   }
+  const bool scored_state = version >= 2;
   AssociationOptions options;
   const std::size_t n_options = r.count("association options", 2);
   for (std::size_t i = 0; i < n_options; ++i) {
@@ -922,16 +919,19 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
   s.started = readIds(r, "started landmarks");
   s.refresh_cursor = static_cast<std::size_t>(r.u64("refresh cursor"));
   s.scans = static_cast<std::size_t>(r.u64("scans"));
-  if (scored_state) {
-    r.fixed("footprint", s.footprint_lo);
-    r.fixed("footprint", s.footprint_hi);
-  }
-  // Empty (lo +inf, hi -inf) or a box of finite corners.
-  const bool empty = (s.footprint_lo.array() == std::numeric_limits<double>::infinity()).all() &&
-                     (s.footprint_hi.array() == -std::numeric_limits<double>::infinity()).all();
-  if (!empty && !(s.footprint_lo.allFinite() && s.footprint_hi.allFinite() &&
-                  (s.footprint_lo.array() <= s.footprint_hi.array()).all())) {
-    r.fail("the sensor's footprint is neither empty nor a box");
+  if (version >= 3) {
+    s.footprint = SensorFootprint::restore(r);
+  } else if (version == 2) {
+    Vec2 lo, hi;
+    r.fixed("footprint", lo);
+    r.fixed("footprint", hi);
+    // Empty (lo +inf, hi -inf) or a box of finite corners.
+    const bool empty = (lo.array() == std::numeric_limits<double>::infinity()).all() &&
+                       (hi.array() == -std::numeric_limits<double>::infinity()).all();
+    if (!empty && !(lo.allFinite() && hi.allFinite() && (lo.array() <= hi.array()).all())) {
+      r.fail("the sensor's footprint is neither empty nor a box");
+    }
+    s.footprint = SensorFootprint::fromBox(lo, hi);
   }
   if (scored_state) s.explained = static_cast<std::size_t>(r.u64Max("explained observations", s.counts.observations));
   for (const auto& [id, p] : s.provisional) {

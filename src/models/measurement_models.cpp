@@ -6,6 +6,7 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 namespace seif {
@@ -126,6 +127,8 @@ Vec2 RangeBearingModel::inverseFromSensor(const Pose2& x, const Vec2& z, Mat23* 
 Vec2 RangeBearingModel::residual(const Vec2& z, const Vec2& zhat) const {
   return {z.x() - zhat.x(), wrapAngle(z.y() - zhat.y())};
 }
+
+Vec2 RangeBearingModel::period() const { return {0.0, 2.0 * std::numbers::pi}; }
 
 // --- Cartesian -----------------------------------------------------------------------------
 

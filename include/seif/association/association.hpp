@@ -97,8 +97,9 @@ struct AssociationOptions {
   /// `confirm` unused, `window` the longest it stays undecided).
   ConfirmRule confirm_rule = ConfirmRule::Count;
   /// Score: the probability P_D that a landmark in the sensor's footprint is reported. The
-  /// footprint is the box, in measurement space (range and bearing), of every observation
-  /// seen so far.
+  /// footprint is where, in measurement space (range and bearing), the observations so far
+  /// lie: per axis, the intervals they cover, joined across gaps under ten standard
+  /// deviations of the sensor's noise (an outlying range adds no length; a bearing wraps).
   double detection_probability = 0.9;
   /// Score: false detections per unit of measurement space (per m rad for range-bearing).
   /// 0: estimated from the scans so far, as the observations no confirmed landmark explained

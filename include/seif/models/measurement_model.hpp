@@ -30,6 +30,8 @@ class MeasurementModel {
   Vec2 inverse(const Pose2& x, const Vec2& z, Mat23* J_y_x = nullptr, Mat2* J_y_z = nullptr) const;
   /// z - zhat in the measurement space (angles wrapped where the model has them).
   virtual Vec2 residual(const Vec2& z, const Vec2& zhat) const { return z - zhat; }
+  /// Per component, the period its residual wraps with (0: none), e.g. 2 pi for a bearing.
+  virtual Vec2 period() const { return Vec2::Zero(); }
 
   const Mat2& noise() const { return noise_; }
   /// The observation's own noise, else the default.

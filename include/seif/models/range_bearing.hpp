@@ -16,6 +16,8 @@ class RangeBearingModel final : public MeasurementModel {
   std::string describe() const override;
   /// z - zhat with the bearing wrapped to (-pi, pi].
   Vec2 residual(const Vec2& z, const Vec2& zhat) const override;
+  /// The bearing's: 2 pi.
+  Vec2 period() const override;
 
  protected:
   Vec2 predictFromSensor(const Pose2& s, const Vec2& y, Mat23* J_z_s, Mat2* J_z_y) const override;
