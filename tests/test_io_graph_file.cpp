@@ -107,6 +107,14 @@ TEST(GraphFile, MalformedRecordsNameFileAndLine) {
   expectError(false, "BR 0 9 7 2 0.1 0.1\n", "f:1", "more than a turn");
   expectError(false, "BR 0 9 1e1 2 0.1 0.1\n", "f:1", "more than a turn");
   expectError(false, "BR 0 9 0.1 2e6 0.1 0.1\n", "f:1", "beyond 10^6 m");  // not "10 to the printed precision"
+  // Positions and displacements beyond 10^6 m are corrupt: their landmark's covariance
+  // would overflow (1e200 squared) into a NaN map.
+  expectError(false, odo + "LANDMARK 1 9 1e200 1 0.4 0 0.4\n", "f:2", "column 4 (x) is beyond 10^6 m");
+  expectError(false, odo + "LANDMARK 1 9 1 -2e6 0.4 0 0.4\n", "f:2", "column 5 (y) is beyond 10^6 m");
+  expectError(false, "ODOMETRY 0 1 1e7 0 0 0.01 0 0 0.01 0 0.01\n", "f:1", "column 4 (dx) is beyond 10^6 m");
+  expectError(true, "VERTEX_SE2 0 1e300 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n", "f:1", "beyond 10^6 m");
+  expectError(true, "VERTEX_SE2 0 0 0 100\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n", "f:1", "more than a turn");
+  expectError(true, "VERTEX_XY 7 0 3e6\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n", "f:1", "beyond 10^6 m");
 }
 
 TEST(GraphFile, ConvertRefusesWhatItCannotWriteFinitelyOrAtAll) {

@@ -428,6 +428,20 @@ TEST_F(MrclamCorrupt, NumberOutOfRange) {
   expectError("Landmark_Groundtruth.dat", kFirstDataLine + 1, "out of range in column 2 (x)");
 }
 
+// Ground truth far beyond any arena (or a heading of many turns) is corrupt: its errors would
+// be reported as infinite, or its landmark dropped from the scores, with a zero exit.
+TEST_F(MrclamCorrupt, GroundTruthBeyondTheWorld) {
+  replaceLine(file("Landmark_Groundtruth.dat"), kFirstDataLine + 1, "7\t1e300\t0\t0\t0");
+  expectError("Landmark_Groundtruth.dat", kFirstDataLine + 1, "1e+300 m in column 2 (x) is beyond 10^6 m");
+}
+
+TEST_F(MrclamCorrupt, GroundTruthPoseBeyondTheWorldOrATurn) {
+  replaceLine(file("Robot2_Groundtruth.dat"), kFirstDataLine + 3, "1248444186.249\t0.3\t-2e6\t0.1");
+  expectError("Robot2_Groundtruth.dat", kFirstDataLine + 3, "-2e+06 m in column 3 (y) is beyond 10^6 m");
+  replaceLine(file("Robot2_Groundtruth.dat"), kFirstDataLine + 3, "1248444186.249\t0.3\t0.2\t1e5");
+  expectError("Robot2_Groundtruth.dat", kFirstDataLine + 3, "more than a turn");
+}
+
 TEST_F(MrclamCorrupt, TimeGoesBack) {
   // Odometry rows are 0.0137 s apart; row 10 gets a stamp before row 9.
   replaceLine(file("Robot2_Odometry.dat"), kFirstDataLine + 10, "1248444187.2\t0.1\t0.2");

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -49,6 +51,46 @@ TEST(AtomicFile, AFailedWriteLeavesNeitherTheFileNorATemporary) {
   filter.update(z);
   EXPECT_THROW(writeMapCsv(dir / "map.csv", filter), std::runtime_error);
   EXPECT_EQ(entries(dir), 0u);
+  fs::remove_all(dir);
+}
+
+/// An EKF whose landmark 2 has a covariance of NaN (landmark 3: an estimate of NaN too).
+class NonFiniteFilter : public test::ForwardingFilter {
+ public:
+  Mat2 landmarkCovariance(int id) const override {
+    return id >= 2 ? Mat2::Constant(std::nan("")) : ForwardingFilter::landmarkCovariance(id);
+  }
+  Vec2 landmark(int id) const override { return id == 3 ? Vec2(std::nan(""), 0.0) : ForwardingFilter::landmark(id); }
+};
+
+TEST(MapCsv, ANaNIsNeverWritten) {
+  // Refused, naming the landmark, with nothing written; or, for a failed run's map, its row
+  // left out.
+  const fs::path dir = freshDir("nan");
+  NonFiniteFilter filter;
+  const Observation z[] = {{1, Vec2(1.0, 0.1), {}}, {2, Vec2(1.5, -0.2), {}}, {3, Vec2(2.0, 0.5), {}}};
+  filter.update(z);
+  try {
+    writeMapCsv(dir / "map.csv", filter);
+    ADD_FAILURE() << "written";
+  } catch (const NumericError& e) {
+    EXPECT_NE(std::string(e.what()).find("map.csv: landmark 2's covariance is not finite"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(entries(dir), 0u);
+  try {
+    writeMapCsv(dir / "map.csv", filter, false);
+    ADD_FAILURE() << "written";
+  } catch (const NumericError& e) {
+    EXPECT_NE(std::string(e.what()).find("landmark 3's estimate is not finite"), std::string::npos) << e.what();
+  }
+  writeMapCsv(dir / "map.csv", filter, true, NonFiniteRows::Omit);
+  std::ifstream in(dir / "map.csv");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  EXPECT_EQ(text.find("nan"), std::string::npos) << text;
+  EXPECT_EQ(text.rfind("id,x,y,cov_xx,cov_xy,cov_yy\n1,", 0), 0u) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 2) << text;  // the header and landmark 1
   fs::remove_all(dir);
 }
 

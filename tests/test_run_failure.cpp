@@ -160,6 +160,82 @@ TEST(RunFailure, WhatAnEarlierRunWroteIsRemovedFirst) {
   fs::remove_all(dir);
 }
 
+TEST(RunFailure, ACheckpointIsNeverWrittenOverAFileThatIsNotOne) {
+  // Given one of the dataset's own files by mistake, the run refuses before it starts, and
+  // the file is left as it was; over an earlier checkpoint it writes.
+  const auto dir = scratchDir("run-checkpoint-target");
+  const fs::path data = writePaperWorld(dir, 40);
+  const std::string odometry = slurp(data / "Robot1_Odometry.dat");
+  seif::RunRequest request;
+  request.dataset = data;
+  request.checkpoint = data / "Robot1_Odometry.dat";
+  request.checkpoint_every = 10;
+  fs::create_directories(dir / "out");
+  try {
+    seif::runDataset(request, dir / "out");
+    ADD_FAILURE() << "written over the odometry";
+  } catch (const seif::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("Robot1_Odometry.dat exists and is not a seif checkpoint"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(slurp(data / "Robot1_Odometry.dat"), odometry);
+  EXPECT_FALSE(fs::exists(dir / "out" / "metrics.json"));
+  request.checkpoint = dir / "run.ckpt";
+  seif::runDataset(request, dir / "out");
+  ASSERT_TRUE(fs::exists(dir / "run.ckpt"));
+  EXPECT_NO_THROW(seif::runDataset(request, dir / "out"));  // over its own checkpoint
+  fs::remove_all(dir);
+}
+
+TEST(RunFailure, AResumedRunRefusesDataOtherThanTheCheckpointsOwn) {
+  // The checkpoint records the digest of the steps it consumed: a control changed before the
+  // resume point, or data cut short of it, is refused (the run's failure, exit 2), where the
+  // same data resumes.
+  const auto dir = scratchDir("run-resume-data");
+  const fs::path data = writePaperWorld(dir, 60);
+  const std::string odometry = slurp(data / "Robot1_Odometry.dat");
+  seif::RunRequest request;
+  request.dataset = data;
+  request.checkpoint = dir / "run.ckpt";
+  request.checkpoint_every = 40;
+  fs::create_directories(dir / "a");
+  seif::runDataset(request, dir / "a");
+  seif::RunRequest resume;
+  resume.dataset = data;
+  resume.resume = request.checkpoint;
+  fs::create_directories(dir / "b");
+  EXPECT_FALSE(seif::runDataset(resume, dir / "b").output.failure);
+  const auto expectRefused = [&](const std::string& what) {
+    const seif::RunReport r = seif::runDataset(resume, dir / "b");
+    ASSERT_TRUE(r.output.failure);
+    try {
+      std::rethrow_exception(r.output.failure);
+    } catch (const seif::InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(r.output.steps, 40u);  // the checkpoint's, nothing run on the other data
+  };
+  // The odometry rewritten row by row: edit(row, line) changes a data row or drops it (false).
+  const auto rewrite = [&](auto&& edit) {
+    std::istringstream in(odometry);
+    std::string text;
+    int row = 0;
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#' || edit(++row, line)) text += line + "\n";
+    }
+    std::ofstream(data / "Robot1_Odometry.dat") << text;
+  };
+  rewrite([](int row, std::string& line) {  // the 10th control's speed changed
+    const std::size_t v = line.find('\t') + 1;
+    if (row == 10) line = line.substr(0, v) + "0.123456789" + line.substr(line.find('\t', v));
+    return true;
+  });
+  expectRefused("steps differ from those the checkpoint consumed");
+  rewrite([](int row, const std::string&) { return row <= 20; });  // cut to 20 controls
+  expectRefused("it is not the data the checkpoint was written from");
+  fs::remove_all(dir);
+}
+
 TEST(RunFailure, AResumedRunRefusesAnotherFilterAndSmoothing) {
   const auto dir = scratchDir("run-resume-conflicts");
   const fs::path data = writePaperWorld(dir, 60);

@@ -124,8 +124,12 @@ void bindSources(py::module_& m) {
   m.def("write_mrclam", &writeMrclam, py::arg("dir"), py::arg("log"),
         "Writes a RobotLog as an MRCLAM folder (what `seif simulate` writes).");
   m.def("write_tum", &writeTum, py::arg("file"), py::arg("trajectory"), "Writes a list of TimedPose as TUM.");
-  m.def("write_map_csv", &writeMapCsv, py::arg("file"), py::arg("filter"), py::arg("covariances") = true,
-        "Writes a filter's map as map.csv (id,x,y[,cov_xx,cov_xy,cov_yy]).");
+  m.def(
+      "write_map_csv",
+      [](const std::filesystem::path& file, const SlamFilter& filter, bool covariances) { writeMapCsv(file, filter, covariances); },
+      py::arg("file"), py::arg("filter"), py::arg("covariances") = true,
+      "Writes a filter's map as map.csv (id,x,y[,cov_xx,cov_xy,cov_yy]); NumericError naming the landmark "
+      "whose estimate or covariance is not finite, and nothing written.");
 }
 
 void bindSimulator(py::module_& m) {

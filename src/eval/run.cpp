@@ -175,11 +175,16 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
   if (resume && resume->associator.empty() && associator && associator->options().method != AssociationMethod::Known) {
     throw InvalidArgument("resume: the checkpoint was written by a run without association");
   }
-  CheckpointWriter checkpoints(checkpointing, out, associator);
+  StepDigest digest;
+  CheckpointWriter checkpoints(checkpointing, out, associator, &digest);
   if (!checkpointing.path.empty()) observers.push_back(&checkpoints);
   RunLoopOptions options;
   options.stop = stop;
-  if (resume) options.start_step = resume->steps;
+  options.digest = &digest;
+  if (resume) {
+    options.start_step = resume->steps;
+    options.skipped_digest = resume->steps_digest;
+  }
   if (associator) {
     options.associate = [associator](SlamFilter& f, const Step&, std::size_t k, std::vector<Observation>& z) {
       associator->associate(f, k, z);

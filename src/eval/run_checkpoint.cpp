@@ -5,7 +5,9 @@
 #include <seif/core/errors.hpp>
 #include <seif/filters/checkpoint.hpp>
 
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace seif {
@@ -47,6 +49,7 @@ void CheckpointWriter::save(const SlamFilter& filter, std::size_t steps) const {
   extras.values = policy_.values;
   extras.values[std::string(kRunOutputKey)] = encodeRunOutput(out_);
   if (associator_) extras.values[std::string(kAssociatorKey)] = associator_->saveState();
+  if (digest_) extras.values[std::string(kStepsDigestKey)] = std::to_string(digest_->value());
   saveCheckpoint(filter, policy_.path, extras);
 }
 
@@ -106,6 +109,14 @@ RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::s
                                        std::to_string(steps));
   }
   if (const auto a = values.find(std::string(kAssociatorKey)); a != values.end()) resume.associator = a->second;
+  // Checkpoints from before the digest carry none: their data is not checked.
+  if (const auto d = values.find(std::string(kStepsDigestKey)); d != values.end()) {
+    std::uint64_t v = 0;
+    const char* end = d->second.data() + d->second.size();
+    const auto [p, ec] = std::from_chars(d->second.data(), end, v);
+    if (ec != std::errc() || p != end) throw DataError(checkpoint, 0, "the steps' digest '" + d->second + "' is not a number");
+    resume.steps_digest = v;
+  }
   return resume;
 }
 

@@ -15,9 +15,11 @@ namespace seif {
 /// steps were consumed.
 class CheckpointWriter : public RunObserver {
  public:
-  /// With `associator`, its state is saved beside the filter (kAssociatorKey).
-  CheckpointWriter(const RunCheckpointing& policy, const RunOutput& out, const Associator* associator = nullptr)
-      : policy_(policy), out_(out), associator_(associator) {}
+  /// With `associator`, its state is saved beside the filter (kAssociatorKey); with
+  /// `digest`, the digest of the steps consumed (kStepsDigestKey).
+  CheckpointWriter(const RunCheckpointing& policy, const RunOutput& out, const Associator* associator = nullptr,
+                   const StepDigest* digest = nullptr)
+      : policy_(policy), out_(out), associator_(associator), digest_(digest) {}
   void afterUpdate(const SlamFilter& filter, const Step& step, std::size_t k, double seconds) override;
   void onStop(const SlamFilter& filter, std::size_t steps) override { save(filter, steps); }
 
@@ -27,6 +29,7 @@ class CheckpointWriter : public RunObserver {
   const RunCheckpointing& policy_;
   const RunOutput& out_;
   const Associator* associator_;
+  const StepDigest* digest_;
 };
 
 

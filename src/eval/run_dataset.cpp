@@ -6,6 +6,7 @@
 #include <seif/filters/checkpoint.hpp>
 #include <seif/filters/factory.hpp>
 #include <seif/models/velocity_model.hpp>
+#include "core/binary_archive.hpp"
 #include "core/files.hpp"
 #include "filters/option_values.hpp"
 #include <seif/io/results.hpp>
@@ -17,6 +18,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <sstream>
 
 namespace seif {
@@ -288,6 +290,21 @@ RunErrors evaluateRun(const SlamFilter& filter, const DatasetInfo& info, const R
 
 namespace {
 
+/// A checkpoint is written over `path` only where nothing is or a checkpoint was: never over
+/// another file (a dataset's own, given by mistake). Throws InvalidArgument naming it.
+void checkCheckpointTarget(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (path.empty() || !std::filesystem::exists(path, ec)) return;
+  std::string head(kArchiveMagic.size(), '\0');
+  std::ifstream in(path, std::ios::binary);
+  const bool checkpoint = std::filesystem::is_regular_file(path, ec) && in.read(head.data(), static_cast<std::streamsize>(head.size())) &&
+                          head == kArchiveMagic;
+  if (!checkpoint) {
+    throw InvalidArgument("checkpoint: " + path.string() +
+                          " exists and is not a seif checkpoint; refusing to write over it (give a new file)");
+  }
+}
+
 /// What selects and shapes the events a dataset yields, as text a checkpoint records:
 /// a resumed run must read the same events.
 std::string datasetOptionsText(const std::string& format, const DatasetOptions& o) {
@@ -368,10 +385,11 @@ void finishReport(const RunRequest& request, const std::filesystem::path& out, c
   try {
     writeMapCsv(out / "map.csv", filter, request.map_covariances);  // marginals computed here
   } catch (const Error&) {
-    // A failed run's filter may hold information no factorisation takes: its map, then,
-    // without covariances (the run's own failure is reported).
-    if (!failure || !request.map_covariances) throw;
-    writeMapCsv(out / "map.csv", filter, false);
+    // A failed run's filter may hold information no factorisation takes, or values that are
+    // not finite: its map, then, without covariances and without those rows (the run's own
+    // failure is reported). A run that had not failed fails here, its other outputs written.
+    if (!failure) report.output.failure = std::current_exception();
+    writeMapCsv(out / "map.csv", filter, false, NonFiniteRows::Omit);
   }
   if (filtered) {
     writeTum(out / "trajectory_filter.tum", report.output.filter_trajectory);
@@ -408,6 +426,7 @@ RunReport runDataset(const RunRequest& request, const std::filesystem::path& out
                           "associate them (association.method nn or jcbb, --association), or drop them with known "
                           "association (association.drop_unlabelled, --drop-unlabelled)");
   }
+  checkCheckpointTarget(request.checkpoint);
   RunCheckpointing checkpointing;
   checkpointing.every = request.checkpoint_every;
   checkpointing.path = request.checkpoint;

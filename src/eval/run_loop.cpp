@@ -6,8 +6,44 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <string>
+#include <variant>
 
 namespace seif {
+
+void StepDigest::bytes(const void* data, std::size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; ++i) {
+    hash_ ^= p[i];
+    hash_ *= 0x100000001b3ULL;  // FNV-1a 64
+  }
+}
+
+void StepDigest::add(const Step& step) {
+  value(step.time);
+  value(static_cast<std::uint64_t>(step.u.index()));
+  std::visit(
+      [this](const auto& u) {
+        using U = std::decay_t<decltype(u)>;
+        if constexpr (std::is_same_v<U, VelocityControl>) {
+          value(u.v), value(u.w), value(u.dt);
+        } else if constexpr (std::is_same_v<U, AckermannControl>) {
+          value(u.speed), value(u.steering), value(u.dt);
+        } else {
+          bytes(u.delta.data(), sizeof(double) * 3);
+          bytes(u.covariance.data(), sizeof(double) * 9);
+        }
+      },
+      step.u);
+  value(static_cast<std::uint64_t>(step.observations.size()));
+  for (const Observation& z : step.observations) {
+    value(z.landmark), value(z.truth);
+    bytes(z.z.data(), sizeof(double) * 2);
+    value(static_cast<std::uint64_t>(z.noise ? 1 : 0));
+    if (z.noise) bytes(z.noise->data(), sizeof(double) * 4);
+  }
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -52,6 +88,20 @@ void runStep(SlamFilter& filter, const Step& step, std::size_t k, const std::vec
 
 bool stopRequested(const RunLoopOptions& options) {
   return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
+}
+
+/// RunLoopOptions::skipped_digest against the steps skipped, `skipped` of them.
+void checkSkipped(const RunLoopOptions& options, std::size_t skipped) {
+  if (!options.skipped_digest || !options.digest) return;
+  if (skipped < options.start_step) {
+    throw InvalidArgument("resume: the data holds " + std::to_string(skipped) + " steps, but the checkpoint consumed " +
+                          std::to_string(options.start_step) + ": it is not the data the checkpoint was written from");
+  }
+  if (options.digest->value() != *options.skipped_digest) {
+    throw InvalidArgument("resume: the data's first " + std::to_string(skipped) +
+                          " steps differ from those the checkpoint consumed: it is not the data the checkpoint was "
+                          "written from (changed since?)");
+  }
 }
 
 void stopRun(SlamFilter& filter, const std::vector<RunObserver*>& observers, std::size_t consumed) {
@@ -112,6 +162,7 @@ std::size_t runLoop(SlamFilter& filter, EventSource& source, StepAssembler& step
     if (k >= options.start_step && stopRequested(options)) {
       // What the stream carried with the step not run (ground truth, GPS) is not handed on.
       if (run == 0) {
+        checkSkipped(options, k);
         for (RunObserver* o : observers) o->onStart(filter, k == 0 ? steps.startTime() : last_time);
       }
       stopRun(filter, observers, k);
@@ -120,19 +171,23 @@ std::size_t runLoop(SlamFilter& filter, EventSource& source, StepAssembler& step
     }
     handOn();
     if (k < options.start_step) {
+      if (options.digest) options.digest->add(step);
       last_time = step.time;
       ++k;
       continue;
     }
     if (run == 0) {
+      checkSkipped(options, k);
       const double start_time = k == 0 ? steps.startTime() : last_time;
       for (RunObserver* o : observers) o->onStart(filter, start_time);
     }
+    if (options.digest) options.digest->add(step);
     runStep(filter, step, k, observers, options);
     ++k;
     ++run;
   }
   handOn();
+  if (run == 0) checkSkipped(options, k);
   finishRun(filter, observers);
   return run;
 }

@@ -116,7 +116,7 @@ class GraphSource final : public EventSource {
     while (t.next()) {
       const std::string_view tag = t.field(0);
       if (tag == "VERTEX_SE2" && t.size() == 5 && before_edges) {  // one listed twice: vertex() refuses it
-        vertices.emplace(t.index(1), Pose2(t.real(2), t.real(3), t.real(4)));
+        vertices.emplace(t.index(1), Pose2(t.coordinate(2), t.coordinate(3), t.angle(4)));
       } else if ((tag == "ODOMETRY" || tag == "EDGE_SE2") && t.size() >= 3 && before_edges) {
         before_edges = false;
         const long long first = t.index(1);
@@ -177,7 +177,7 @@ class GraphSource final : public EventSource {
     claim(to, Kind::Pose, 2);
     if (!reached_.insert(to).second) table_.fail("pose " + std::to_string(to) + " is reached twice: the chain must reach a new pose");
     OdometryIncrement u;
-    u.delta = Vec3(table_.real(3), table_.real(4), table_.angle(5));
+    u.delta = Vec3(table_.coordinate(3), table_.coordinate(4), table_.angle(5));
     u.covariance = recordCovariance<3>(table_, 6, !isam);
     flush();
     ++k_;
@@ -196,7 +196,7 @@ class GraphSource final : public EventSource {
       z.noise = diagonalNoise(sr, sb);
     } else {
       table_.expect({isam ? "LANDMARK" : "EDGE_SE2_XY", "pose", "landmark", "x", "y", "m11", "m12", "m22"});
-      z.z = Vec2(table_.real(3), table_.real(4));
+      z.z = Vec2(table_.coordinate(3), table_.coordinate(4));
       z.noise = recordCovariance<2>(table_, 5, !isam);
       if (gtsam_landmarks_) {  // GTSAM's loader: bearing-range, sigma_b = sqrt(m11 / 10), sigma_r = sqrt(m11)
         const double range = z.z.norm();
@@ -228,12 +228,14 @@ class GraphSource final : public EventSource {
     if (pose) {
       table_.expect({"VERTEX_SE2", "id", "x", "y", "theta"});
       claim(table_.index(1), Kind::Pose, 1);
-      for (std::size_t c = 2; c < 5; ++c) table_.real(c);
+      table_.coordinate(2);
+      table_.coordinate(3);
+      table_.angle(4);
     } else {
       table_.expect({"VERTEX_XY", "id", "x", "y"});
       claim(table_.index(1), Kind::Landmark, 1);
-      table_.real(2);
-      table_.real(3);
+      table_.coordinate(2);
+      table_.coordinate(3);
     }
     // A vertex's estimate is read once (the chain's first pose starts the run): a second one
     // for the same id would be ignored, or replace the first.

@@ -136,8 +136,8 @@ std::map<int, Vec2> parseLandmarks(TextTable& t) {
   while (t.next()) {
     t.expect({"subject", "x", "y", "x_sd", "y_sd"});
     const int subject = t.integer(0);
-    const double x = t.real(1);
-    const double y = t.real(2);
+    const double x = t.coordinate(1);
+    const double y = t.coordinate(2);
     const double x_sd = t.real(3);
     const double y_sd = t.real(4);
     if (subject < 1) t.fail("subject number " + std::to_string(subject) + " must be positive");
@@ -186,7 +186,7 @@ TimedPose groundtruthRow(TextTable& t, TimeOrder& order) {
   t.expect({"time", "x", "y", "theta"});
   TimedPose p;
   p.time = t.real(0);
-  p.pose = Pose2(t.real(1), t.real(2), t.real(3));
+  p.pose = Pose2(t.coordinate(1), t.coordinate(2), t.angle(3));
   order.check(t, p.time);
   return p;
 }

@@ -43,16 +43,22 @@ void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vec
   f.commit();
 }
 
-void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter, bool covariances) {
+void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter, bool covariances,
+                 NonFiniteRows non_finite) {
   AtomicFile f(file);
   std::fprintf(f.get(), covariances ? "id,x,y,cov_xx,cov_xy,cov_yy\n" : "id,x,y\n");
   for (int id : filter.landmarkIds()) {
     const Vec2 y = filter.landmark(id);
+    const Mat2 P = covariances ? filter.landmarkCovariance(id) : Mat2::Zero();
+    if (!y.allFinite() || !P.allFinite()) {
+      if (non_finite == NonFiniteRows::Omit) continue;
+      throw NumericError(file.filename().string() + ": landmark " + std::to_string(id) + "'s " +
+                         (y.allFinite() ? "covariance" : "estimate") + " is not finite");
+    }
     if (!covariances) {
       std::fprintf(f.get(), "%d,%.9g,%.9g\n", id, y.x(), y.y());
       continue;
     }
-    const Mat2 P = filter.landmarkCovariance(id);
     std::fprintf(f.get(), "%d,%.9g,%.9g,%.9g,%.9g,%.9g\n", id, y.x(), y.y(), P(0, 0), P(0, 1),
                  P(1, 1));
   }

@@ -142,6 +142,12 @@ double TextTable::range(std::size_t col) const {
   return value;
 }
 
+double TextTable::coordinate(std::size_t col) const {
+  const double value = real(col);
+  if (std::abs(value) > kMaxRange) fail(formatDouble(value) + " m in " + columnName(col) + " is beyond 10^6 m");
+  return value;
+}
+
 double TextTable::angle(std::size_t col) const {
   const double value = real(col);
   constexpr double kTurn = 6.283185307179586;

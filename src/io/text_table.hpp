@@ -70,6 +70,8 @@ class TextTable {
   double angle(std::size_t col) const;
   /// real(), a sensor's range in metres: > 0 and at most kMaxRange.
   double range(std::size_t col) const;
+  /// real(), a position or a displacement in metres: at most kMaxRange either way.
+  double coordinate(std::size_t col) const;
   int integer(std::size_t col) const;
   long long index(std::size_t col) const;
   /// Half a unit of the last printed decimal of column `col` as written ("3.141593":

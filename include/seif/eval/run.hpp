@@ -12,6 +12,7 @@
 
 #include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <exception>
 #include <filesystem>
 #include <functional>
@@ -61,6 +62,8 @@ struct RunOutput {
 /// The extras key under which a run's checkpoint carries its outputs so far (binary; the
 /// associator's is kAssociatorKey).
 inline constexpr std::string_view kRunOutputKey = "run-output";
+/// The extras key of the digest of the steps a run's checkpoint consumed (StepDigest, decimal).
+inline constexpr std::string_view kStepsDigestKey = "steps-digest";
 
 struct RunCheckpointing {
   std::size_t every = 0;  ///< 0: never periodically (only where a stopped run stops)
@@ -76,6 +79,10 @@ struct RunResume {
   /// The run's associator (Associator::saveState, under kAssociatorKey), empty when the run
   /// had none: runFilter continues with Associator::restoreState of it.
   std::string associator;
+  /// The digest of the steps it consumed (kStepsDigestKey): runFilter refuses a source whose
+  /// first `steps` steps have another (InvalidArgument in RunOutput::failure). None in
+  /// checkpoints written before it: not checked.
+  std::optional<std::uint64_t> steps_digest;
 };
 
 /// The run state a checkpoint carries (RunCheckpointing), from the extras load() returns.

@@ -18,7 +18,9 @@
 
 #include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace seif {
@@ -50,6 +52,23 @@ class RunObserver {
   virtual void onGps(const GpsFix& /*fix*/) {}
 };
 
+/// A running digest (FNV-1a 64) of the steps a run took from its source, bit for bit: each
+/// step's time, control and observations as the source gave them (before association). A
+/// run's checkpoint records it, and a resumed run checks the steps it skips against it.
+class StepDigest {
+ public:
+  void add(const Step& step);
+  std::uint64_t value() const { return hash_; }
+
+ private:
+  void bytes(const void* data, std::size_t n);
+  template <typename T>
+  void value(const T& v) {
+    bytes(&v, sizeof v);
+  }
+  std::uint64_t hash_ = 0xcbf29ce484222325ULL;
+};
+
 /// Between predict and update of step k: may rewrite `observations` (initially the step's)
 /// before the filter's update sees them, e.g. to associate them with the map (an Associator,
 /// association/association.hpp, which may also take provisional landmarks out of the filter).
@@ -65,6 +84,13 @@ struct RunLoopOptions {
   /// observer), the run ends there - onStop, then finish() and onFinish as after a last step.
   /// Null: the run goes to the end of its steps.
   const std::atomic<bool>* stop = nullptr;
+  /// Streamed runs: every step taken from the source, skipped or run, is added to it before
+  /// it runs (a checkpoint saved after step k - 1 records the digest of steps 0 .. k - 1).
+  StepDigest* digest = nullptr;
+  /// With start_step and digest: the digest the skipped steps must have (the checkpoint's).
+  /// Other steps, or fewer than start_step, are an InvalidArgument before any step runs:
+  /// the data is not the data the checkpoint consumed.
+  std::optional<std::uint64_t> skipped_digest;
 };
 
 /// Runs the steps of `data` from options.start_step through `filter` (until options.stop),

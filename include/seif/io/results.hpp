@@ -13,9 +13,6 @@ namespace seif {
 /// "timestamp tx ty tz qx qy qz qw" per line; z = 0 and the quaternion is the yaw rotation.
 void writeTum(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory);
 
-/// Header "id,x,y,cov_xx,cov_xy,cov_yy", one row per mapped landmark in map order; without
-/// `covariances`, "id,x,y" (the marginals cost the SEIF a sparse factorisation: memory
-/// beyond the filter's at 10^6 landmarks, README "Scale").
 /// trajectory_cov.csv: time and the upper triangle of each pose's covariance
 /// (time,cov_xx,cov_xy,cov_xt,cov_yy,cov_yt,cov_tt; t = heading), one row per trajectory pose.
 void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory,
@@ -25,6 +22,16 @@ void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vec
 /// dataset's local frame).
 void writeGpsCsv(const std::filesystem::path& file, const std::vector<GpsFix>& fixes);
 
-void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter, bool covariances = true);
+/// What writeMapCsv does with a landmark whose estimate (or covariance) is not finite.
+enum class NonFiniteRows {
+  Refuse,  ///< throw NumericError naming the landmark; nothing written
+  Omit,    ///< leave its row out (the map of a failed run, whose failure is reported)
+};
+
+/// Header "id,x,y,cov_xx,cov_xy,cov_yy", one row per mapped landmark in map order; without
+/// `covariances`, "id,x,y" (the marginals cost the SEIF a sparse factorisation: memory
+/// beyond the filter's at 10^6 landmarks, README "Scale"). A NaN is never written.
+void writeMapCsv(const std::filesystem::path& file, const SlamFilter& filter, bool covariances = true,
+                 NonFiniteRows non_finite = NonFiniteRows::Refuse);
 
 }  // namespace seif
