@@ -1,5 +1,6 @@
 // The command-line tool end to end, as a user runs it.
 #include "cli_support.hpp"
+#include "scenario.hpp"
 #include "options.hpp"
 
 #include <seif/core/errors.hpp>
@@ -18,6 +19,8 @@ namespace {
 using seif::test::runCli;
 using seif::test::scratchDir;
 using seif::test::slurp;
+using seif::test::writePaperWorld;
+namespace fs = std::filesystem;
 
 const std::string kMrclam = std::string(SEIF_SHARED_DATA_DIR) + "/mrclam/MRCLAM_Dataset6";
 
@@ -383,6 +386,28 @@ TEST(Cli, NoiseValuesResolveRequiresFinitePositiveSigmas) {
   }
   options.noise["sigma_nope"] = 1.0;
   EXPECT_THROW(seif::checkNoiseNames(options, {"sigma_v"}, "mrclam"), seif::InvalidArgument);
+}
+
+TEST(Cli, FlagsTheFilterDoesNotTakeAreNoted) {
+  // A SEIF option with the EKF, a batch option without the batch, an association tuning flag
+  // with known association: each named on stderr, and the run is the one without them.
+  const auto dir = scratchDir("ignored-flags");
+  const fs::path data = writePaperWorld(dir, 40);
+  const auto plain = runCli("run --dataset " + data.string() + " --filter ekf --out " + (dir / "a").string());
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  const auto noted = runCli("run --dataset " + data.string() +
+                            " --filter ekf --active 3 --solver kkt --accept-gate 0.9 --out " + (dir / "b").string());
+  ASSERT_EQ(noted.status, 0) << noted.err;
+  EXPECT_NE(noted.err.find("note: --active is a SEIF option: --filter ekf does not take it"), std::string::npos) << noted.err;
+  EXPECT_NE(noted.err.find("note: --solver sets the batch MAP"), std::string::npos) << noted.err;
+  EXPECT_NE(noted.err.find("note: --accept-gate tunes nn and jcbb"), std::string::npos) << noted.err;
+  EXPECT_EQ(plain.err.find("note:"), std::string::npos) << plain.err;
+  EXPECT_EQ(slurp(dir / "a" / "trajectory.tum"), slurp(dir / "b" / "trajectory.tum"));
+  // Where they apply, no note.
+  const auto seif = runCli("run --dataset " + data.string() + " --filter seif --active 3 --out " + (dir / "c").string());
+  ASSERT_EQ(seif.status, 0) << seif.err;
+  EXPECT_EQ(seif.err.find("note:"), std::string::npos) << seif.err;
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Cli, AssociationOnAClutteredWorld) {

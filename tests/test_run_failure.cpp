@@ -31,29 +31,30 @@ using seif::test::slurp;
 
 namespace {
 
-/// Cuts a world's log at its `row`-th control (1-based, after the comment lines), which it
-/// stamps 1e306 s late (at 10^3 m/s, the largest speed a reader takes): the reader takes it,
-/// and the control before it, held over those 1e306 s, gives an increment that overflows.
-/// The steps before it are the world's.
-void overflowControl(const fs::path& data, int row) {
-  double cut = 0.0;
-  auto rewrite = [&](const char* name, auto&& edit) {
-    std::istringstream in(slurp(data / name));
-    std::string text;
-    int n = 0;
-    for (std::string line; std::getline(in, line);) {
-      if (line.empty() || line[0] == '#' || edit(++n, line)) text += line + "\n";
+/// Adds a landmark (subject 56, barcode 156) seen twice at the stamp of the world's
+/// `row`-th control (1-based, after the comment lines), at a range of 1e-300 m: the reader
+/// takes it (a range > 0), the first sighting places it at the sensor, and the second is
+/// predicted from there, a degenerate range-bearing prediction that fails the step. The steps
+/// before it are the world's.
+void degenerateSighting(const fs::path& data, int row) {
+  std::istringstream odometry(slurp(data / "Robot1_Odometry.dat"));
+  std::string stamp;
+  int n = 0;
+  for (std::string line; std::getline(odometry, line);) {
+    if (!line.empty() && line[0] != '#' && ++n == row) stamp = line.substr(0, line.find('\t'));
+  }
+  std::ofstream(data / "Barcodes.dat", std::ios::app) << "56\t156\n";
+  std::istringstream in(slurp(data / "Robot1_Measurement.dat"));
+  std::string text;
+  bool added = false;
+  for (std::string line; std::getline(in, line);) {
+    if (!added && !line.empty() && line[0] != '#' && std::stod(line) >= std::stod(stamp)) {
+      text += stamp + "\t156\t1e-300\t0\n" + stamp + "\t156\t1e-300\t0.1\n";
+      added = true;
     }
-    std::ofstream(data / name) << text;
-  };
-  rewrite("Robot1_Odometry.dat", [&](int n, std::string& line) {
-    if (n == row) {
-      cut = std::stod(line);
-      line = "1e306\t1000" + line.substr(line.find('\t', line.find('\t') + 1));
-    }
-    return n <= row;
-  });
-  rewrite("Robot1_Measurement.dat", [&](int, const std::string& line) { return std::stod(line) < cut; });
+    text += line + "\n";
+  }
+  std::ofstream(data / "Robot1_Measurement.dat") << text;
 }
 
 }  // namespace
@@ -62,7 +63,7 @@ TEST(RunFailure, AStepThatFailsEndsTheRunWithTheOutputsOfTheStepsBeforeIt) {
   const auto dir = scratchDir("run-failure");
   const fs::path good = writePaperWorld(dir / "good", 200);
   const fs::path bad = writePaperWorld(dir / "bad", 200);
-  overflowControl(bad, 120);
+  degenerateSighting(bad, 120);
   for (const char* filter : {"seif", "ekf"}) {
     SCOPED_TRACE(filter);
     seif::RunRequest request;
@@ -83,7 +84,7 @@ TEST(RunFailure, AStepThatFailsEndsTheRunWithTheOutputsOfTheStepsBeforeIt) {
     EXPECT_LT(failed.output.steps, full.output.steps);
     const nlohmann::json metrics = nlohmann::json::parse(slurp(part / "metrics.json"));
     EXPECT_EQ(metrics.at("steps").get<std::size_t>(), failed.output.steps);
-    EXPECT_NE(metrics.at("failure").get<std::string>().find("motion increment is not finite"), std::string::npos)
+    EXPECT_NE(metrics.at("failure").get<std::string>().find("prediction is degenerate"), std::string::npos)
         << metrics.at("failure");
     EXPECT_TRUE(nlohmann::json::parse(slurp(whole / "metrics.json")).at("failure").is_null());
     // The trajectory written is the whole run's first poses, up to the failed step.
@@ -95,7 +96,7 @@ TEST(RunFailure, AStepThatFailsEndsTheRunWithTheOutputsOfTheStepsBeforeIt) {
   // The command line reports the run, then the failure: one line on stderr, exit status 2.
   const auto r = runCli("run --dataset " + bad.string() + " --filter ekf --out " + (dir / "cli").string());
   EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_NE(r.err.find("motion increment is not finite"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("prediction is degenerate"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_NE(r.out.find("the run failed at step"), std::string::npos) << r.out;
   EXPECT_TRUE(fs::exists(dir / "cli" / "trajectory.tum"));

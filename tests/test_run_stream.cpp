@@ -111,6 +111,26 @@ TEST(StepAssembler, EventsGoingBackInTimeAreADataError) {
   EXPECT_THROW(assemble(source), DataError);
 }
 
+TEST(StepAssembler, AControlHeldOverAnHourIsADataError) {
+  // Odometry stamped from 0 and observations from 1.2e9 (one stream shifted): the last control
+  // would be held over 1.2e9 s. An hour is taken; more is refused, naming the source.
+  const auto motion = std::make_shared<VelocityModel>(0.1, 0.1, NoiseForm::Rate);
+  const Observation z{5, Vec2(1, 0), std::nullopt};
+  ListSource hour({ControlEvent{0.0, VelocityControl{1, 0, 0}}, ObservationEvent{3600.0, {z}}}, motion);
+  EXPECT_EQ(assemble(hour).size(), 1u);
+  for (const Event& late : {Event(ObservationEvent{1.2e9, {z}}), Event(ControlEvent{3602.0, VelocityControl{1, 0, 0}})}) {
+    ListSource shifted({ControlEvent{0.0, VelocityControl{1, 0, 0}}, ControlEvent{1.0, VelocityControl{1, 0, 0}}, late},
+                       motion);
+    try {
+      assemble(shifted);
+      ADD_FAILURE() << "assembled";
+    } catch (const DataError& e) {
+      EXPECT_NE(std::string(e.what()).find("list: an event at t = "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("held an hour at most"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(RunStream, EqualsTheInMemoryRunForEveryFilter) {
   const RobotLog log = simulate(presetConfig(WorldPreset::Paper, 0, 0, 5));
   const Dataset data = buildDataset(log);

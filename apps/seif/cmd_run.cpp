@@ -89,6 +89,15 @@ void run(const RunArgs& args) {
   }
   request.command_line = args.command_line;
   request.stop = &g_stop;
+  // Flags that do not apply are noted, not refused: the run is what was asked without them.
+  // (A resumed run's filter and association are its checkpoint's.)
+  if (request.resume.empty()) {
+    std::vector<std::string> notes = args.options.ignoredBy(args.filter, args.smooth);
+    if (request.association.method == AssociationMethod::Known) {
+      for (std::string& n : args.association.ignoredByKnown()) notes.push_back(std::move(n));
+    }
+    for (const std::string& n : notes) std::fprintf(stderr, "seif run: note: %s\n", n.c_str());
+  }
   RunReport r;
   {
     const StopOnSignals stop_on_signals;

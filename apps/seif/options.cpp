@@ -227,7 +227,23 @@ void FilterFlags::add(CLI::App& cmd, bool batch) {
         break;
     }
     flag->capture_default_str();
+    flags_.emplace_back(&o, flag);
   }
+}
+
+std::vector<std::string> FilterFlags::ignoredBy(const std::string& filter, bool smooth) const {
+  const std::string name = filter.substr(0, filter.find(':'));
+  std::vector<std::string> ignored;
+  for (const auto& [o, flag] : flags_) {
+    if (flag->count() == 0) continue;
+    const bool seif_only = o->scope == FilterOption::Scope::Seif && (name == "ekf" || name == "eif");
+    const bool batch_only = o->scope == FilterOption::Scope::Batch && name != "batch" && !smooth;
+    if (seif_only) ignored.push_back("--" + std::string(o->key) + " is a SEIF option: --filter " + name + " does not take it");
+    if (batch_only) {
+      ignored.push_back("--" + std::string(o->key) + " sets the batch MAP: --filter " + name + " without --smooth does not run it");
+    }
+  }
+  return ignored;
 }
 
 FilterSpec FilterFlags::resolve() const {
@@ -330,10 +346,11 @@ void AssociationFlags::add(CLI::App& cmd, bool tuning) {
     std::string& value = values[key];
     value = o.get(defaults);
     if (o.kind == AssociationOption::Kind::Flag) {
-      cmd.add_flag_callback("--" + key, [&value] { value = "true"; }, std::string(o.help));
+      flags_.emplace_back(key, cmd.add_flag_callback("--" + key, [&value] { value = "true"; }, std::string(o.help)));
       continue;
     }
     CLI::Option* flag = cmd.add_option("--" + key, value, std::string(o.help));
+    flags_.emplace_back(key, flag);
     if (o.kind == AssociationOption::Kind::Choice) {
       flag->check(CLI::IsMember(splitChoices(o.choices)));
     } else {
@@ -349,6 +366,16 @@ void AssociationFlags::add(CLI::App& cmd, bool tuning) {
     }
     flag->capture_default_str();
   }
+}
+
+std::vector<std::string> AssociationFlags::ignoredByKnown() const {
+  std::vector<std::string> ignored;
+  for (const auto& [key, flag] : flags_) {
+    // --association itself, and --drop-unlabelled, which known association reads.
+    if (flag->count() == 0 || key == "association" || key == "drop-unlabelled") continue;
+    ignored.push_back("--" + key + " tunes nn and jcbb: --association known does not read it");
+  }
+  return ignored;
 }
 
 AssociationOptions AssociationFlags::resolve() const {

@@ -68,6 +68,12 @@ struct FilterFlags {
   void add(CLI::App& cmd, bool batch = false);
   /// The flags as a spec's defaults (name "seif").
   FilterSpec resolve() const;
+  /// The flags given on the command line that `filter` (a spec) does not take: a SEIF
+  /// option with ekf or eif, a batch option without batch or `smooth`.
+  std::vector<std::string> ignoredBy(const std::string& filter, bool smooth) const;
+
+ private:
+  std::vector<std::pair<const FilterOption*, const CLI::Option*>> flags_;
 };
 
 /// Data association's flags, one per row of the association option table
@@ -78,6 +84,11 @@ struct AssociationFlags {
   /// Without `tuning` only the rows that are not tuning (--association, --gate-marginal).
   void add(CLI::App& cmd, bool tuning = true);
   AssociationOptions resolve() const;
+  /// With --association known: the flags given that only nn and jcbb read.
+  std::vector<std::string> ignoredByKnown() const;
+
+ private:
+  std::vector<std::pair<std::string, const CLI::Option*>> flags_;
 };
 
 /// The keys a filter spec takes, for --filter's help (from filterOptions()).

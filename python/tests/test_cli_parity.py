@@ -247,6 +247,23 @@ def test_bench_study_python_equals_cli(cli, tmp_path):
         seif.run_bench(request)
 
 
+def test_a_bench_case_shorter_than_its_window_repeats_a_bounded_number_of_times():
+    """A 50-landmark corridor times 25 steps: a window of 10^5 would repeat it 4000 times; at
+    most 20 times as often as asked, and no more once the case has used its time budget."""
+    request = seif.BenchRequest()
+    request.filters = ["seif"]
+    request.landmarks = [50]
+    request.window = 100000
+    request.repeat = 1
+    report = seif.run_bench(request)
+    assert report.rows[0].measurement is not None
+    medians = json.loads(report.json())["results"][0]["repeat_medians"]
+    assert 1 < len(medians) <= 20
+    request.max_seconds = 1e-3
+    medians = json.loads(seif.run_bench(request).json())["results"][0]["repeat_medians"]
+    assert len(medians) == 1
+
+
 def test_plot_run_draws_what_seif_plot_draws(cli, simulated_folder, tmp_path):
     pytest.importorskip("matplotlib")
     run_cli(cli, "run", "--dataset", simulated_folder, "--filter", "seif", "--out", tmp_path)

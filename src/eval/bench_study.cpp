@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -224,17 +225,22 @@ Outcome runIsolated(const BenchCase& c, unsigned timeout_seconds) {
 /// median: interference from other processes only ever slows a run down, so the fastest
 /// run is the closest to the filter's own cost. A case whose corridor is too short for the
 /// whole window (N < 2 window) runs proportionally more often, so that every case times
-/// about repeat x window steps. All medians are kept for bench.json; the peak memory is the
-/// largest of all runs.
+/// about repeat x window steps, but at most kMaxRepeatFactor times as often, and no more
+/// runs start once the case has taken `max_seconds` (after `repeat` runs). All medians are
+/// kept for bench.json; the peak memory is the largest of all runs.
 struct Repeated {
   Outcome best;
   std::vector<double> medians;
 };
-Repeated runRepeated(const BenchCase& c, int repeat, unsigned timeout_seconds) {
+constexpr int kMaxRepeatFactor = 20;
+Repeated runRepeated(const BenchCase& c, int repeat, unsigned timeout_seconds, double max_seconds) {
   Repeated r;
   double peak = 0.0;
   int runs = repeat;
+  const auto start = std::chrono::steady_clock::now();
   for (int i = 0; i < runs; ++i) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (i >= repeat && elapsed > max_seconds) break;
     Outcome o = runIsolated(c, timeout_seconds);
     if (!o.measurement) {
       if (!r.best.measurement) r.best = o;
@@ -242,7 +248,7 @@ Repeated runRepeated(const BenchCase& c, int repeat, unsigned timeout_seconds) {
     }
     if (i == 0 && o.measurement->steps > 0) {
       const auto timed = static_cast<int>(o.measurement->steps);
-      runs = repeat * ((c.window + timed - 1) / timed);
+      runs = repeat * std::min(kMaxRepeatFactor, (c.window + timed - 1) / timed);
     }
     r.medians.push_back(o.measurement->us_per_step_median);
     peak = std::max(peak, o.measurement->peak_rss_mb);
@@ -368,11 +374,11 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
       if (!points.empty()) {
         row.estimate = estimateBenchCase(filter, n, steps, points);
         const int timed = static_cast<int>(std::min<double>(args.window, std::max(1.0, std::floor(steps / 2))));
-        const int runs = args.repeat * ((args.window + timed - 1) / timed);
+        const int runs = args.repeat * std::min(kMaxRepeatFactor, (args.window + timed - 1) / timed);
         if (auto why = skipReason(filter, n, *row.estimate, runs, args)) row.skipped = *why;
       }
       if (row.skipped.empty()) {
-        Repeated rep = runRepeated(c, args.repeat, timeout);
+        Repeated rep = runRepeated(c, args.repeat, timeout, args.max_seconds);
         row.repeat_medians = std::move(rep.medians);
         row.measurement = rep.best.measurement;
         if (row.measurement) {

@@ -16,6 +16,18 @@ namespace {
   throw DataError(source.info().source, 0, msg.str());
 }
 
+/// The longest a rate control is held [s]: a log whose controls and observations are an hour
+/// apart has streams whose clocks disagree (one shifted, or in other units), not a pause.
+constexpr double kMaxControlHold = 3600.0;
+
+void checkHold(const EventSource& source, double t, double now) {
+  if (t - now <= kMaxControlHold) return;
+  std::ostringstream msg;
+  msg << "an event at t = " << t << " comes " << t - now << " s after the control in force (from t = " << now
+      << "): a control is held an hour at most (do the streams' clocks agree?)";
+  throw DataError(source.info().source, 0, msg.str());
+}
+
 }  // namespace
 
 void StepAssembler::setRateStep(Step& step, double t) const {
@@ -50,6 +62,7 @@ bool StepAssembler::next(EventSource& source, Step& step, std::vector<TimedPose>
         continue;
       }
       if (started_ && t > now_ && has_control_) {  // the previous control ends here
+        checkHold(source, t, now_);
         setRateStep(step, t);
         step.observations.clear();
         control_ = c->input;
@@ -100,6 +113,7 @@ bool StepAssembler::next(EventSource& source, Step& step, std::vector<TimedPose>
         now_ = t;
         return true;
       }
+      checkHold(source, t, now_);
       setRateStep(step, t);
       step.observations = std::move(obs.observations);
       now_ = t;

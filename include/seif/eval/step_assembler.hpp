@@ -21,7 +21,8 @@ namespace seif {
 /// Ground truth and GPS are handed on as they come.
 class StepAssembler {
  public:
-  /// The next step; false at the end of the stream. Events whose time goes backwards are a
+  /// The next step; false at the end of the stream. Events whose time goes backwards, and a
+  /// rate control held over more than an hour (streams whose clocks disagree), are a
   /// DataError naming the source.
   bool next(EventSource& source, Step& step, std::vector<TimedPose>* groundtruth,
             std::vector<GpsFix>* gps);
