@@ -117,6 +117,17 @@ TEST(GraphFile, MalformedRecordsNameFileAndLine) {
   expectError(true, "VERTEX_XY 7 0 3e6\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n", "f:1", "beyond 10^6 m");
 }
 
+TEST(GraphFile, NumbersWithAnExplicitSignAreRead) {
+  // printf's "%+f" writes "+0.5"; one sign only ("+-1" and "++1" are not numbers).
+  auto s = openIsamText("f", "ODOMETRY 0 1 +1.0 -0.5 +0.1 0.01 0 0 0.02 0 0.03\nLANDMARK 1 50 +3 +.5 0.4 0 0.4\n");
+  const std::vector<Event> e = drain(*s);
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_EQ(std::get<OdometryIncrement>(std::get<ControlEvent>(e[0]).input).delta, Vec3(1.0, -0.5, 0.1));
+  EXPECT_EQ(std::get<ObservationEvent>(e[1]).observations[0].z, Vec2(3.0, 0.5));
+  expectError(false, "ODOMETRY 0 1 +-1 0 0 0.01 0 0 0.01 0 0.01\n", "f:1", "bad number '+-1'");
+  expectError(false, "ODOMETRY 0 1 ++1 0 0 0.01 0 0 0.01 0 0.01\n", "f:1", "bad number '++1'");
+}
+
 TEST(GraphFile, ConvertRefusesWhatItCannotWriteFinitelyOrAtAll) {
   const fs::path dir = fs::temp_directory_path() / "seif-convert-refusals";
   fs::create_directories(dir);

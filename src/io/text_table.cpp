@@ -123,12 +123,14 @@ std::string TextTable::columnName(std::size_t col) const {
 
 double TextTable::real(std::size_t col) const {
   const std::string_view f = fields_[col];
+  // An explicit sign, as printf's "%+f" writes it ("+0.02"); from_chars takes only '-'.
+  const std::string_view number = f.size() > 1 && f[0] == '+' && f[1] != '-' && f[1] != '+' ? f.substr(1) : f;
   double value = 0.0;
-  const auto res = std::from_chars(f.data(), f.data() + f.size(), value);
-  if (res.ec == std::errc::result_out_of_range && res.ptr == f.data() + f.size()) {
+  const auto res = std::from_chars(number.data(), number.data() + number.size(), value);
+  if (res.ec == std::errc::result_out_of_range && res.ptr == number.data() + number.size()) {
     fail("number " + quotedField(f) + " out of range in " + columnName(col));
   }
-  if (res.ec != std::errc() || res.ptr != f.data() + f.size()) {
+  if (res.ec != std::errc() || res.ptr != number.data() + number.size()) {
     fail("bad number " + quotedField(f) + " in " + columnName(col));
   }
   if (!std::isfinite(value)) fail("non-finite number " + quotedField(f) + " in " + columnName(col));
