@@ -233,6 +233,22 @@ TEST(DatasetInterpolatePose, LinearInsideClampedOutside) {
   EXPECT_THROW(interpolatePose({}, 0.0), seif::InvalidArgument);
 }
 
+TEST(DatasetInterpolatePose, AStartPoseOutsideTheGroundTruthSaysSo) {
+  // The ground truth starting 150 s after the first control (or ending before it) gives the
+  // run an end pose as its start: the source says so, with the gap; within a second it is
+  // the interpolated pose.
+  const std::vector<TimedPose> track = {{150.0, Pose2(0, 0, 0)}, {151.0, Pose2(1, 0, 0)}};
+  EXPECT_EQ(timeOutsideTrack(track, 0.0), 150.0);
+  EXPECT_EQ(timeOutsideTrack(track, 150.5), 0.0);
+  EXPECT_EQ(timeOutsideTrack(track, 160.0), 9.0);
+  EXPECT_EQ(startPoseFromGroundTruth(track, 150.5), "ground truth at the first control");
+  EXPECT_EQ(startPoseFromGroundTruth(track, 149.5), "ground truth at the first control");
+  const std::string late = startPoseFromGroundTruth(track, 0.0);
+  EXPECT_NE(late.find("ground truth's first pose, 150 s from the first control"), std::string::npos) << late;
+  EXPECT_NE(late.find("does not cover it"), std::string::npos) << late;
+  EXPECT_NE(startPoseFromGroundTruth(track, 160.0).find("ground truth's last pose, 9 s"), std::string::npos);
+}
+
 TEST(DatasetInterpolatePose, HeadingTakesTheShortArcAcrossPi) {
   const std::vector<TimedPose> track = {{0.0, Pose2(0, 0, kPi - 0.1)}, {1.0, Pose2(0, 0, -kPi + 0.1)}};
   // Half way: through pi, not through 0.

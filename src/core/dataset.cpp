@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <numeric>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -98,6 +99,21 @@ Pose2 interpolatePose(const std::vector<TimedPose>& track, double t) {
   p.head<2>() = a.pose.head<2>() + s * (b.pose.head<2>() - a.pose.head<2>());
   p.z() = wrapAngle(a.pose.z() + s * wrapAngle(b.pose.z() - a.pose.z()));
   return p;
+}
+
+double timeOutsideTrack(const std::vector<TimedPose>& track, double t) {
+  if (track.empty()) throw InvalidArgument("timeOutsideTrack: empty track");
+  return std::max({0.0, track.front().time - t, t - track.back().time});
+}
+
+std::string startPoseFromGroundTruth(const std::vector<TimedPose>& track, double t) {
+  const double gap = timeOutsideTrack(track, t);
+  if (!(gap > 1.0)) return "ground truth at the first control";
+  std::ostringstream s;
+  s << "ground truth's " << (track.front().time > t ? "first" : "last") << " pose, " << gap
+    << " s from the first control (the ground truth does not cover it: the start pose is off by what the robot "
+       "moved in between)";
+  return s.str();
 }
 
 }  // namespace seif

@@ -119,7 +119,7 @@ class MrclamSource final : public EventSource {
       if (span.back().time >= odometry_time_) break;
     }
     info_.start_pose = interpolatePose(span, odometry_time_);
-    info_.start_pose_source = "ground truth at the first control (" + robotFile(robot_, "Groundtruth") + ")";
+    info_.start_pose_source = startPoseFromGroundTruth(span, odometry_time_) + " (" + robotFile(robot_, "Groundtruth") + ")";
   }
 
   void advanceOdometry() {

@@ -14,7 +14,7 @@ RobotLogSource::RobotLogSource(const RobotLog& log, const NoiseModel& noise, Noi
   info_.has_groundtruth = !log.groundtruth.empty();
   if (!log.odometry.empty() && info_.has_groundtruth) {
     info_.start_pose = interpolatePose(log.groundtruth, log.odometry.front().time);
-    info_.start_pose_source = "ground truth at the first control";
+    info_.start_pose_source = startPoseFromGroundTruth(log.groundtruth, log.odometry.front().time);
   } else {
     info_.start_pose_source = "origin: the log has no ground truth";
   }

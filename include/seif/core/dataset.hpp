@@ -135,5 +135,11 @@ Dataset buildDataset(const RobotLog& log);
 /// arc, result wrapped to (-pi, pi]); clamps outside the recorded span. Requires a
 /// non-empty, time-sorted track (throws InvalidArgument when empty).
 Pose2 interpolatePose(const std::vector<TimedPose>& track, double t);
+/// How far [s] `t` lies outside the track's time span (0 within it): how far interpolatePose()
+/// had to take an end pose for it.
+double timeOutsideTrack(const std::vector<TimedPose>& track, double t);
+/// A start pose's source when the ground truth interpolated at the first control came from
+/// an end of the track over a second away: "ground truth at the first control" otherwise.
+std::string startPoseFromGroundTruth(const std::vector<TimedPose>& track, double t);
 
 }  // namespace seif
