@@ -253,6 +253,14 @@ TEST(ConsistencyCli, WritesTheTableJsonAndCsv) {
   const auto bad = seif::test::runCli("consistency --filters ekf:relax=3 --out " + dir.string());
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.err.find("ekf:relax=3"), std::string::npos) << bad.err;
+  // The simulator's flags with --dataset (one of them would be ignored), --robots without it:
+  // usage errors, before any work.
+  const auto mixed = seif::test::runCli("consistency --dataset " + dir.string() + " --preset park --out " + dir.string());
+  EXPECT_EQ(mixed.status, 1);
+  EXPECT_NE(mixed.err.find("--preset sets the simulated world: with --dataset"), std::string::npos) << mixed.err;
+  const auto robots = seif::test::runCli("consistency --robots 2 --out " + dir.string());
+  EXPECT_EQ(robots.status, 1);
+  EXPECT_NE(robots.err.find("--robots chooses the robots of --dataset"), std::string::npos) << robots.err;
 }
 
 }  // namespace

@@ -144,7 +144,21 @@ void addConsistencyCommand(CLI::App& app) {
       ->delimiter(',')
       ->check(CLI::Range(1, 5))
       ->capture_default_str();
-  cmd->callback([args] { consistencyCommand(*args); });
+  cmd->callback([args, cmd] {
+    // The simulator's flags and --dataset's exclude each other: one of them would be ignored.
+    if (!args->dataset.empty()) {
+      for (const char* flag :
+           {"--preset", "--path", "--landmarks", "--steps", "--runs", "--seed", "--clutter", "--detection-probability"}) {
+        if (cmd->count(flag) > 0) {
+          throw InvalidArgument(std::string(flag) + " sets the simulated world: with --dataset the runs are the data's "
+                                "robots (leave it out)");
+        }
+      }
+    } else if (cmd->count("--robots") > 0) {
+      throw InvalidArgument("--robots chooses the robots of --dataset: give --dataset, or leave it out");
+    }
+    consistencyCommand(*args);
+  });
 }
 
 }  // namespace seif::cli
