@@ -181,6 +181,8 @@ void bindCore(py::module_& m) {
           py::arg("x"), py::arg("z"), "The landmark seen as z from pose x: (y, dy/dx (2x3), dy/dz (2x2)).")
       .def("residual", &MeasurementModel::residual, py::arg("z"), py::arg("zhat"),
            "z - zhat in measurement space (angles wrapped).")
+      .def_property_readonly("period", &MeasurementModel::period,
+                             "Per component, the period its residual wraps with (0: none): (0, 2 pi) for range-bearing.")
       .def_property_readonly("noise", py::overload_cast<>(&MeasurementModel::noise, py::const_), py::return_value_policy::copy,
                              "Default 2x2 measurement covariance.")
       .def_property_readonly("mount", &MeasurementModel::mount, py::return_value_policy::copy, "Sensor pose in the vehicle frame.")

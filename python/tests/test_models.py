@@ -41,6 +41,9 @@ def test_range_bearing_residual_wraps():
     r = sensor.residual(np.array([1.0, np.pi - 0.1]), np.array([1.0, -np.pi + 0.1]))
     np.testing.assert_allclose(r, [0.0, -0.2], atol=1e-12)
     np.testing.assert_array_equal(sensor.noise, seif.diagonal_noise(0.1, 0.05))
+    # The period its residual wraps the bearing with; a Cartesian point wraps nothing.
+    np.testing.assert_array_equal(sensor.period, [0.0, 2.0 * np.pi])
+    np.testing.assert_array_equal(seif.CartesianModel(np.eye(2)).period, [0.0, 0.0])
 
 
 @pytest.mark.parametrize("model,u", [
