@@ -745,7 +745,7 @@ void writeIds(ArchiveWriter& w, const std::vector<int>& ids) {
   for (int id : ids) w.i64(id);
 }
 
-// Version 3: the footprint as intervals per axis (footprint.hpp) instead of a box.
+// Version 3: the footprint as clusters per axis (footprint.hpp) instead of a box.
 constexpr std::string_view kStateSection = "associator v3";
 
 int readId(ArchiveReader& r, const char* what) {
@@ -821,7 +821,7 @@ Associator Associator::restoreState(std::string_view bytes, const std::string& n
   ArchiveReader r(bytes, name);
   // Version 2 added the track score (each provisional landmark's score, the footprint, the
   // explained observations); a version-1 state restores with none of them (its rule: count).
-  // Version 3 holds the footprint as intervals; a version-2 box becomes one per axis.
+  // Version 3 holds the footprint as clusters; a version-2 box becomes one per axis.
   int version = 3;
   try {
     r.section(kStateSection);

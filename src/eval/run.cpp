@@ -180,7 +180,7 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
   if (!checkpointing.path.empty()) observers.push_back(&checkpoints);
   RunLoopOptions options;
   options.stop = stop;
-  options.digest = &digest;
+  if (!checkpointing.path.empty() || resume) options.digest = &digest;  // only checkpoints read it
   if (resume) {
     options.start_step = resume->steps;
     options.skipped_digest = resume->steps_digest;
