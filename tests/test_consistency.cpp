@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <cmath>
 #include <iostream>
 
@@ -208,6 +209,43 @@ TEST(Consistency, ARunAFilterStopsInIsListedAndTheRestIsKept) {
       << seif::consistencyTable(r);
 }
 
+// Stopped once two runs are done (the progress callback sets the flag; one thread, so the
+// runs go in order), the study summarises the runs it finished as a study of those alone
+// would, and says so. Stopped before any run finishes, it throws Interrupted.
+TEST(Consistency, AStoppedStudySummarisesTheRunsItFinished) {
+  seif::ConsistencyOptions o = smallStudy(1);
+  std::atomic<bool> stop{false};
+  o.stop = &stop;
+  const seif::ConsistencyResult r = seif::runConsistency(o, [&](std::size_t done, std::size_t) {
+    if (done == 2) stop = true;
+  });
+  EXPECT_TRUE(r.interrupted);
+  EXPECT_EQ(r.runs, 2);
+  EXPECT_EQ(r.runs_requested, 4);
+  EXPECT_EQ(r.run_names, (std::vector<std::string>{"seed 5", "seed 6"}));
+  seif::ConsistencyOptions first_two = smallStudy(1);
+  first_two.runs = 2;
+  const seif::ConsistencyResult whole = seif::runConsistency(first_two);
+  EXPECT_FALSE(whole.interrupted);
+  EXPECT_EQ(whole.run_names, r.run_names);
+  EXPECT_EQ(r.landmark_band.hi, whole.landmark_band.hi);
+  ASSERT_EQ(r.filters.size(), whole.filters.size());
+  for (std::size_t i = 0; i < r.filters.size(); ++i) {
+    EXPECT_EQ(r.filters[i].nees_final.landmark, whole.filters[i].nees_final.landmark) << r.filters[i].name;
+    EXPECT_EQ(r.filters[i].mse_runs, whole.filters[i].mse_runs) << r.filters[i].name;
+  }
+  EXPECT_NE(seif::consistencyTable(r).find("Interrupted: 2 of 4 runs finished; the figures are theirs (seeds 5..6)"),
+            std::string::npos)
+      << seif::consistencyTable(r);
+  EXPECT_EQ(seif::consistencyTable(whole).find("Interrupted"), std::string::npos);
+  const auto j = nlohmann::json::parse(seif::consistencyJson(r, o));
+  EXPECT_EQ(j["runs"], 2);
+  EXPECT_EQ(j["runs_requested"], 4);
+  EXPECT_TRUE(j["interrupted"].get<bool>());
+  EXPECT_EQ(j["run_names"][1], "seed 6");
+  EXPECT_THROW(seif::runConsistency(o), seif::Interrupted);  // the flag is still set
+}
+
 TEST(Consistency, BadOptionsAreRejected) {
   seif::ConsistencyOptions o = smallStudy(1);
   o.runs = 0;
@@ -250,6 +288,20 @@ TEST(ConsistencyCli, WritesTheTableJsonAndCsv) {
   EXPECT_FALSE(js["filters"][1]["failed_runs"].empty());
   EXPECT_TRUE(js["filters"][1]["mse_runs"][1].is_null() || js["filters"][1]["mse_runs"][0].is_null());  // a stopped run
   EXPECT_TRUE(js["filters"][1]["mse_ratio_to_batch"].is_null());  // no batch row
+  // Ctrl-C: the runs finished are written, and the exit status is 130.
+  const auto dir3 = seif::test::scratchDir("consistency_cli_interrupted");
+  const auto interrupted = seif::test::runCliSignalled(
+      "consistency --runs 100000 --landmarks 15 --steps 60 --samples 3 --jobs 1 --filters ekf --no-figures --out " +
+          dir3.string(),
+      "INT", 3.0);
+  EXPECT_EQ(interrupted.status, 130) << interrupted.err;
+  EXPECT_NE(interrupted.err.find("consistency interrupted: "), std::string::npos) << interrupted.err;
+  EXPECT_NE(interrupted.out.find("| ekf |"), std::string::npos) << interrupted.out;
+  const nlohmann::json ji = nlohmann::json::parse(seif::test::slurp(dir3 / "nees.json"));
+  EXPECT_TRUE(ji["interrupted"].get<bool>());
+  EXPECT_GE(ji["runs"].get<int>(), 1);
+  EXPECT_LT(ji["runs"].get<int>(), 100000);
+  EXPECT_EQ(ji["run_names"].size(), ji["runs"].get<std::size_t>());
   const auto bad = seif::test::runCli("consistency --filters ekf:relax=3 --out " + dir.string());
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.err.find("ekf:relax=3"), std::string::npos) << bad.err;

@@ -169,7 +169,7 @@ TEST(VictoriaPark, EachFileIsRequiredOnlyWhereItIsRead) {
   fs::remove_all(dir);
 }
 
-TEST(VictoriaPark, RawDetectionsFromAnotherFormatAreAnInvalidArgument) {
+TEST(VictoriaPark, OptionsOfAnotherFormatAreAnInvalidArgument) {
   const fs::path file = fs::temp_directory_path() / ("seif-raw-isam-" + std::to_string(::getpid()) + ".txt");
   std::ofstream(file) << "ODOMETRY 0 1 1 0 0 1e-4 0 0 1e-4 0 1e-4\n";
   EXPECT_NO_THROW(openDataset(file));
@@ -180,6 +180,28 @@ TEST(VictoriaPark, RawDetectionsFromAnotherFormatAreAnInvalidArgument) {
     EXPECT_NE(std::string(e.what()).find("Victoria Park folder only"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("isam"), std::string::npos) << e.what();
   }
+  // So are the other options of one format only: a robot number, LANDMARK records read as
+  // GTSAM reads them.
+  DatasetOptions robot;
+  robot.robot = 3;
+  try {
+    openDataset(file, DatasetFormat::Auto, robot);
+    ADD_FAILURE() << "robot 3 of an iSAM file";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("robot number (3) selects one robot's log of an MRCLAM folder only"),
+              std::string::npos)
+        << e.what();
+  }
+  DatasetOptions gtsam;
+  gtsam.isam_landmarks_as_gtsam = true;
+  const fs::path park = fs::temp_directory_path() / ("seif-gtsam-park-" + std::to_string(::getpid()));
+  fs::create_directories(park);
+  std::ofstream(park / "controls.txt") << "1 0 0\n";
+  std::ofstream(park / "tree_observations_associated_UTS.txt") << "1 5 1 3 0 0\n";
+  EXPECT_NO_THROW(openDataset(park));
+  EXPECT_THROW(openDataset(park, DatasetFormat::Auto, gtsam), InvalidArgument);
+  EXPECT_THROW(openDataset(park, DatasetFormat::Auto, robot), InvalidArgument);
+  fs::remove_all(park);
   fs::remove(file);
   EXPECT_EQ(parseDetections("raw"), Detections::Raw);
   EXPECT_EQ(detectionsName(Detections::Associated), "associated");

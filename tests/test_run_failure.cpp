@@ -79,7 +79,7 @@ TEST(RunFailure, AStepThatFailsEndsTheRunWithTheOutputsOfTheStepsBeforeIt) {
     fs::create_directories(part);
     const seif::RunReport failed = seif::runDataset(request, part);
     ASSERT_TRUE(failed.output.failure);
-    EXPECT_THROW(std::rethrow_exception(failed.output.failure), seif::NumericError);
+    EXPECT_THROW(std::rethrow_exception(failed.output.failure), seif::ModelError);  // the sighting, not the filter
     EXPECT_GT(failed.output.steps, 50u);
     EXPECT_LT(failed.output.steps, full.output.steps);
     const nlohmann::json metrics = nlohmann::json::parse(slurp(part / "metrics.json"));

@@ -272,9 +272,22 @@ TEST(RunLoop, AFailureInsideAStepNamesTheFilterTheStepAndItsTime) {
     runLoop(*filter, w.data, {}, options);
     FAIL() << "no exception";
   } catch (const NumericError& e) {
+    FAIL() << "a step's bad data is not a numerical failure: " << e.what();
+  } catch (const ModelError& e) {
     const std::string what = e.what();
     EXPECT_EQ(what.rfind(filter->name() + ": step 3 (t = ", 0), 0u) << what;
     EXPECT_NE(what.find("): no match"), std::string::npos) << what;
+  }
+  // A numerical failure keeps its kind.
+  options.associate = [](const SlamFilter&, const Step&, std::size_t k, std::vector<Observation>&) {
+    if (k == 2) throw NumericError("singular");
+  };
+  auto numeric = w.filter("seif");
+  try {
+    runLoop(*numeric, w.data, {}, options);
+    FAIL() << "no exception";
+  } catch (const NumericError& e) {
+    EXPECT_NE(std::string(e.what()).find(": step 2 (t = "), std::string::npos) << e.what();
   }
   // A caller's own exception passes as it is (its type is the caller's to catch).
   struct Mine : std::runtime_error {

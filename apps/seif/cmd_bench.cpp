@@ -3,7 +3,9 @@
 // OUT/bench.json and render OUT/bench.png (scripts/figures/bench.py).
 #include "commands.hpp"
 #include "options.hpp"
+#include "stop_signals.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/eval/bench.hpp>
 #include "core/files.hpp"
 
@@ -53,17 +55,28 @@ void bench(const BenchArgs& args) {
               static_cast<unsigned long long>(args.world_seed), args.window, args.repeat,
               args.max_seconds, args.max_memory_gb);
   std::fputs(benchHeaderText().c_str(), stdout);
-  const BenchReport report = runBench(request, [&](const BenchRow& row) {
-    std::fputs(benchRowText(row).c_str(), stdout);
-    std::fflush(stdout);
-  });
+  request.stop = StopOnSignals::flag();  // Ctrl-C: the finished cases are written
+  BenchReport report;
+  {
+    const StopOnSignals stop_on_signals;
+    report = runBench(request, [&](const BenchRow& row) {
+      std::fputs(benchRowText(row).c_str(), stdout);
+      std::fflush(stdout);
+    });
+  }
   std::fputs(benchTargetsText(report.targets).c_str(), stdout);
   const std::filesystem::path json = std::filesystem::path(args.out) / "bench.json";
   writeFileAtomically(json, benchJson(report));
   std::printf("wrote %s\n", json.string().c_str());
-  if (args.no_figure) return;
-  const std::filesystem::path png = std::filesystem::path(args.out) / "bench.png";
-  if (renderFigure("bench.py", {json.string(), png.string()})) std::printf("wrote %s\n", png.string().c_str());
+  if (!args.no_figure) {
+    const std::filesystem::path png = std::filesystem::path(args.out) / "bench.png";
+    if (renderFigure("bench.py", {json.string(), png.string()})) std::printf("wrote %s\n", png.string().c_str());
+  }
+  if (report.interrupted) {
+    std::fflush(stdout);
+    throw Interrupted("bench interrupted after " + std::to_string(report.rows.size()) +
+                      " cases: the rows above are in " + json.string());
+  }
 }
 
 }  // namespace
@@ -80,7 +93,9 @@ void addBenchCommand(CLI::App& app) {
       "budget is skipped and the reason recorded. With --association nn|jcbb the corridor's ids\n"
       "are hidden and every scan is associated (the SEIF gates with its local marginal); its time per\n"
       "scan is reported beside the filter's step time, which excludes it. Writes OUT/bench.json and OUT/bench.png\n"
-      "(rendered by scripts/figures/bench.py with /usr/bin/python3 and matplotlib).");
+      "(rendered by scripts/figures/bench.py with /usr/bin/python3 and matplotlib). Ctrl-C (or SIGTERM)\n"
+      "stops the study: the cases finished are written (bench.json \"interrupted\": true) and the\n"
+      "exit status is 130.");
   cmd->add_option("--filters", args->filters, "comma-separated filters: ekf, eif, seif")
       ->delimiter(',')
       ->check(CLI::IsMember({"ekf", "eif", "seif"}))

@@ -3,6 +3,7 @@
 // eval/consistency.hpp).
 #include "commands.hpp"
 #include "options.hpp"
+#include "stop_signals.hpp"
 
 #include <seif/core/errors.hpp>
 #include <seif/eval/consistency.hpp>
@@ -66,6 +67,8 @@ void consistencyCommand(const ConsistencyArgs& args) {
   }
   ConsistencyResult result;
   {
+    const StopOnSignals stop_on_signals;  // Ctrl-C: the finished runs are summarised and written
+    options.stop = StopOnSignals::flag();
     Progress progress("seif consistency");
     result = runConsistency(options, [&](std::size_t done, std::size_t total) { progress(done, total); });
   }
@@ -83,6 +86,12 @@ void consistencyCommand(const ConsistencyArgs& args) {
     stopped += (stopped.empty() ? "" : "; ") + f.name + " stopped in " + std::to_string(f.failed_runs.size()) +
                " of " + std::to_string(result.runs) + " runs (first: " + f.failed_runs.front().run + ": " +
                f.failed_runs.front().error + ")";
+  }
+  if (result.interrupted) {
+    std::fflush(stdout);
+    throw Interrupted("consistency interrupted: " + std::to_string(result.runs) + " of " +
+                      std::to_string(result.runs_requested) + " runs finished; their results are in " + args.out +
+                      (stopped.empty() ? "" : " (" + stopped + ")"));
   }
   if (!stopped.empty()) {
     throw NumericError("consistency: " + stopped + "; the other runs' results are in " + args.out);
@@ -107,7 +116,9 @@ void addConsistencyCommand(CLI::App& app) {
       "Writes OUT/nees.json, OUT/nees.csv, OUT/table.md and the figures nees_global.png and\n"
       "nees_relative.png (scripts/figures/consistency.py, /usr/bin/python3 with matplotlib).\n"
       "A filter that stops in a run (a numerical failure: it diverged) is listed under the table and\n"
-      "in nees.json, its figures are those of its other runs, and the exit status is 2.");
+      "in nees.json, its figures are those of its other runs, and the exit status is 2.\n"
+      "Ctrl-C (or SIGTERM) stops the study: the runs every filter finished are summarised and\n"
+      "written (nees.json \"interrupted\", \"run_names\"), and the exit status is 130.");
   cmd->add_option("--preset", args->preset, "simulator world: paper, uniform, corridor or park")
       ->check(CLI::IsMember({"paper", "uniform", "corridor", "park"}))
       ->capture_default_str();

@@ -2,12 +2,11 @@
 #include <seif/core/errors.hpp>
 #include "commands.hpp"
 #include "options.hpp"
+#include "stop_signals.hpp"
 
 #include <seif/eval/run_dataset.hpp>
 
-#include <atomic>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 
 namespace seif::cli {
@@ -30,37 +29,6 @@ struct RunArgs {
   bool smooth = false;
   AssociationFlags association;
   std::string command_line;
-};
-
-// Ctrl-C (SIGINT) or SIGTERM during a run stops it after the step it is in, and the outputs so
-// far are written. The handler stays for more of them (`timeout` and process managers send
-// one to the process and one to its group); Ctrl-\ (SIGQUIT) still ends the process at once.
-std::atomic<bool> g_stop{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
-
-extern "C" void requestStop(int) { g_stop.store(true, std::memory_order_relaxed); }
-
-/// Installs requestStop() for SIGINT and SIGTERM while it lives, and restores what was there.
-/// A signal the shell ignores (a background job's SIGINT, nohup) stays ignored.
-class StopOnSignals {
- public:
-  using Handler = void (*)(int);
-  StopOnSignals() : int_(install(SIGINT)), term_(install(SIGTERM)) {}
-  ~StopOnSignals() {
-    std::signal(SIGINT, int_);
-    std::signal(SIGTERM, term_);
-  }
-  StopOnSignals(const StopOnSignals&) = delete;
-  StopOnSignals& operator=(const StopOnSignals&) = delete;
-
- private:
-  static Handler install(int signal) {
-    const Handler before = std::signal(signal, requestStop);
-    if (before == SIG_IGN) std::signal(signal, SIG_IGN);
-    return before;
-  }
-  Handler int_;
-  Handler term_;
 };
 
 void run(const RunArgs& args) {
@@ -88,7 +56,7 @@ void run(const RunArgs& args) {
     throw InvalidArgument("--checkpoint-every needs --checkpoint FILE");
   }
   request.command_line = args.command_line;
-  request.stop = &g_stop;
+  request.stop = StopOnSignals::flag();
   // Flags that do not apply are noted, not refused: the run is what was asked without them.
   // (A resumed run's filter and association are its checkpoint's.)
   if (request.resume.empty()) {

@@ -516,7 +516,10 @@ void bindConsistency(py::module_& m) {
       .def_readonly("failed_runs", &ConsistencyFilterResult::failed_runs, py::return_value_policy::copy,
                     "runs it stopped in (a numerical failure), left out of its figures");
   py::class_<ConsistencyResult>(m, "ConsistencyResult")
-      .def_readonly("runs", &ConsistencyResult::runs)
+      .def_readonly("runs", &ConsistencyResult::runs, "the runs summarised")
+      .def_readonly("interrupted", &ConsistencyResult::interrupted, "stopped before every run finished")
+      .def_readonly("runs_requested", &ConsistencyResult::runs_requested)
+      .def_readonly("run_names", &ConsistencyResult::run_names, "the runs summarised: 'seed 6', or the dataset's")
       .def_readonly("steps", &ConsistencyResult::steps)
       .def_readonly("pose_band", &ConsistencyResult::pose_band)
       .def_readonly("landmark_band", &ConsistencyResult::landmark_band)
@@ -668,6 +671,7 @@ void bindBench(py::module_& m) {
       .def_readonly("rows", &BenchReport::rows, py::return_value_policy::copy)
       .def_readonly("calibration", &BenchReport::calibration, py::return_value_policy::copy)
       .def_readonly("targets", &BenchReport::targets, py::return_value_policy::copy)
+      .def_readonly("interrupted", &BenchReport::interrupted, "stopped before every case was run")
       .def("json", [](const BenchReport& r) { return benchJson(r); }, "bench.json of `seif bench`")
       .def("summary_text", &benchSummaryText, "the table `seif bench` prints (its rows and targets)");
   m.def(

@@ -111,14 +111,14 @@ def test_unknown_landmark(spec):
         f.predict_measurement(4)
 
 
-def test_failure_inside_a_run_is_numeric_error():
-    """A step that fails (a zero-range first sighting) is rethrown by the run loop as
-    NumericError naming the step."""
+def test_failure_inside_a_run_names_the_step():
+    """A step that fails on its data (a zero-range first sighting) is rethrown by the run
+    loop naming the step, as an InvalidArgument (seif::ModelError), not a NumericError."""
     data = seif.Dataset()
     good = seif.Step(1.0, seif.VelocityControl(0.1, 0.0, 1.0), [seif.Observation(1, np.array([1.0, 0.0]))])
     bad = seif.Step(2.0, seif.VelocityControl(0.1, 0.0, 1.0), [seif.Observation(2, np.array([0.0, 0.0]))])
     data.steps = [good, bad]
-    with pytest.raises(seif.NumericError, match="step 1"):
+    with pytest.raises(seif.InvalidArgument, match="step 1"):
         seif.run_filter(seif.make_filter("ekf", np.zeros(3), PAPER), data)
 
 

@@ -34,8 +34,11 @@ inline constexpr std::uint32_t kArchiveVersion = 14;  // 2: the config no longer
                                                       // 14: seif controls since the last observation
 inline constexpr std::size_t kArchiveHeaderSize = 32;
 
-/// FNV-1a 64 of `bytes` (the payload checksum).
-std::uint64_t fnv1a64(std::string_view bytes);
+inline constexpr std::uint64_t kFnv1a64Basis = 0xcbf29ce484222325ULL;
+
+/// FNV-1a 64 of `bytes` (the payload checksum), continuing from `hash` (the value so far
+/// of the bytes before them; the offset basis for none).
+std::uint64_t fnv1a64(std::string_view bytes, std::uint64_t hash = kFnv1a64Basis);
 
 class ArchiveWriter {
  public:

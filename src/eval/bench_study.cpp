@@ -227,13 +227,15 @@ Outcome runIsolated(const BenchCase& c, unsigned timeout_seconds) {
 /// whole window (N < 2 window) runs proportionally more often, so that every case times
 /// about repeat x window steps, but at most kMaxRepeatFactor times as often, and no more
 /// runs start once the case has taken `max_seconds` (after `repeat` runs). All medians are
-/// kept for bench.json; the peak memory is the largest of all runs.
+/// kept for bench.json; the peak memory is the largest of all runs. Once `stop` is set no
+/// more runs start.
 struct Repeated {
   Outcome best;
   std::vector<double> medians;
 };
 constexpr int kMaxRepeatFactor = 20;
-Repeated runRepeated(const BenchCase& c, int repeat, unsigned timeout_seconds, double max_seconds) {
+Repeated runRepeated(const BenchCase& c, int repeat, unsigned timeout_seconds, double max_seconds,
+                     const std::atomic<bool>* stop) {
   Repeated r;
   double peak = 0.0;
   int runs = repeat;
@@ -241,6 +243,7 @@ Repeated runRepeated(const BenchCase& c, int repeat, unsigned timeout_seconds, d
   for (int i = 0; i < runs; ++i) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (i >= repeat && elapsed > max_seconds) break;
+    if (i > 0 && stop != nullptr && stop->load(std::memory_order_relaxed)) break;  // the runs so far
     Outcome o = runIsolated(c, timeout_seconds);
     if (!o.measurement) {
       if (!r.best.measurement) r.best = o;
@@ -347,9 +350,14 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
   // A child that runs far past its estimate is stopped (the estimate was wrong).
   const auto timeout = static_cast<unsigned>(std::min(86400.0, 10.0 * args.max_seconds + 60.0));
   std::vector<BenchMeasurement> measured;
+  const auto stopping = [&] { return request.stop != nullptr && request.stop->load(std::memory_order_relaxed); };
   for (const std::string& filter : args.filters) {
     std::vector<BenchPoint> points;
     for (const int n : args.landmarks) {
+      if (stopping()) {
+        report.interrupted = true;
+        break;
+      }
       BenchCase c;
       c.filter = filter;
       c.landmarks = n;
@@ -367,6 +375,10 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
         BenchCase cal = c;
         cal.landmarks = kCalibrationLandmarks;
         const Outcome o = runIsolated(cal, timeout);
+        if (!o.measurement && stopping()) {  // its child ended by the same Ctrl-C
+          report.interrupted = true;
+          break;
+        }
         if (!o.measurement) throw NumericError("bench: calibration of " + filter + " failed: " + o.error);
         points.push_back(pointOf(*o.measurement));
         report.calibration.push_back(*o.measurement);
@@ -378,7 +390,11 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
         if (auto why = skipReason(filter, n, *row.estimate, runs, args)) row.skipped = *why;
       }
       if (row.skipped.empty()) {
-        Repeated rep = runRepeated(c, args.repeat, timeout, args.max_seconds);
+        Repeated rep = runRepeated(c, args.repeat, timeout, args.max_seconds, request.stop);
+        if (!rep.best.measurement && stopping()) {  // its child ended by the same Ctrl-C
+          report.interrupted = true;
+          break;
+        }
         row.repeat_medians = std::move(rep.medians);
         row.measurement = rep.best.measurement;
         if (row.measurement) {
@@ -494,7 +510,8 @@ std::string benchJson(const BenchReport& report) {
                               {"config", config},
                               {"results", results},
                               {"calibration", calibration},
-                              {"targets", targets}};
+                              {"targets", targets},
+                              {"interrupted", report.interrupted}};
   return doc.dump(2) + "\n";
 }
 

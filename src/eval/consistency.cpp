@@ -116,15 +116,19 @@ void measureErrors(const SlamFilter& filter, const std::map<int, Vec2>& truth, c
   out.mse_aligned = out.rmse_aligned * out.rmse_aligned;
 }
 
-FilterRun runOne(const FilterSpec& spec, const Dataset& data, const FilterConfig& config, const Pose2& start,
-                 const std::vector<std::size_t>& samples, std::uint64_t seed, bool posterior) {
+/// One filter over one run's data; nothing when `stop` stopped it before its last step.
+std::optional<FilterRun> runOne(const FilterSpec& spec, const Dataset& data, const FilterConfig& config,
+                                const Pose2& start, const std::vector<std::size_t>& samples, std::uint64_t seed,
+                                bool posterior, const std::atomic<bool>* stop) {
   FilterSpec s = spec;
   s.seif.seed = seed;  // a SEIF's random relaxation varies with the run like the data
   std::unique_ptr<SlamFilter> filter = makeFilter(s, start, config);
   FilterRun out;
   out.own.nees.assign(samples.size(), kNoNees);
   NeesSampler sampler(data, samples, posterior, out);
-  runLoop(*filter, data, {&sampler});
+  RunLoopOptions loop;
+  loop.stop = stop;
+  if (runLoop(*filter, data, {&sampler}, loop) < data.steps.size()) return std::nullopt;
   measureErrors(*filter, data.landmarks, nullptr, out.own);
   if (out.posterior) {
     const std::optional<Eigen::VectorXd> mean = filter->posteriorMean();
@@ -269,6 +273,8 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
   const std::size_t nf = options.filters.size();
   std::vector<std::vector<FilterRun>> results(runs);  // [run][filter]
   std::vector<std::size_t> steps_of_run(runs, 0);
+  std::vector<char> finished(runs, 0);  // every filter ran the whole run (not stopped)
+  const auto stopping = [&] { return options.stop != nullptr && options.stop->load(std::memory_order_relaxed); };
   const auto runName = [&](std::size_t r) {
     return real ? options.datasets[r].name : "seed " + std::to_string(options.world.seed + r);
   };
@@ -283,8 +289,18 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     steps_of_run[r] = run_data.steps.size();
     for (const FilterSpec& spec : options.filters) {
       try {
-        results[r].push_back(runOne(spec, run_data, config, start, samples, world.seed, options.posterior_mean));
-      } catch (const NumericError& e) {  // the filter diverged: this run's figures are NaN, the study goes on
+        if (stopping()) return;  // left out: results[r] is not read
+        std::optional<FilterRun> run =
+            runOne(spec, run_data, config, start, samples, world.seed, options.posterior_mean, options.stop);
+        if (!run) return;
+        results[r].push_back(std::move(*run));
+      } catch (const Error& e) {
+        // A step failed (the run loop's NumericError or ModelError: the filter diverged, or
+        // its estimate put a landmark where no sighting can be predicted): this run's
+        // figures are NaN, the study goes on. Anything else stops the study.
+        const bool step_failed = dynamic_cast<const NumericError*>(&e) != nullptr ||
+                                 dynamic_cast<const ModelError*>(&e) != nullptr;
+        if (!step_failed) throw NumericError("consistency: " + runName(r) + ", filter " + spec.text + ": " + e.what());
         FilterRun failed;  // summarise() reads a stopped run as NaN throughout
         failed.failure = e.what();
         results[r].push_back(std::move(failed));
@@ -292,21 +308,32 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
         throw NumericError("consistency: " + runName(r) + ", filter " + spec.text + ": " + e.what());
       }
     }
+    finished[r] = 1;
   };
   parallelFor(runs, options.threads, runFilters, progress);
 
+  std::vector<std::size_t> kept;  // the runs summarised
+  for (std::size_t r = 0; r < runs; ++r) {
+    if (finished[r]) kept.push_back(r);
+  }
+  if (kept.empty()) throw Interrupted("consistency: stopped before any run finished");
+
   ConsistencyResult result;
-  result.runs = static_cast<int>(runs);
-  result.steps = steps_of_run[0];
-  for (std::size_t r = 1; r < runs && !real; ++r) {  // real runs: sampled at the same fractions
+  result.runs = static_cast<int>(kept.size());
+  result.runs_requested = static_cast<int>(runs);
+  result.interrupted = kept.size() < runs;
+  for (const std::size_t r : kept) result.run_names.push_back(runName(r));
+  result.steps = steps_of_run[kept.front()];
+  for (const std::size_t r : kept) {  // real runs: sampled at the same fractions
+    if (real) break;
     if (steps_of_run[r] != result.steps) {
       throw NumericError("consistency: runs differ in their number of steps (" + std::to_string(result.steps) +
                          " and " + std::to_string(steps_of_run[r]) + ")");
     }
   }
   result.sample_steps = sampleSteps(result.steps, options.samples);
-  result.pose_band = neesBand95(runs, 3);
-  result.landmark_band = neesBand95(runs, 2);
+  result.pose_band = neesBand95(kept.size(), 3);
+  result.landmark_band = neesBand95(kept.size(), 2);
   // One row per filter and estimate: its own, then its posterior mean's where measured
   // (every run of a filter has one or none: it depends on the spec alone).
   auto summarise = [&](std::size_t f, bool posterior) {
@@ -322,12 +349,12 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     };
     for (std::size_t s = 0; s < result.sample_steps.size(); ++s) {
       std::vector<NeesPoint> at;
-      for (std::size_t r = 0; r < runs; ++r) at.push_back(estimate(r).nees[s]);
+      for (const std::size_t r : kept) at.push_back(estimate(r).nees[s]);
       fr.nees.push_back(meanPoint(at));
     }
     fr.nees_final = fr.nees.back();
     std::vector<double> mse, mse_aligned, rmse, rmse_aligned;
-    for (std::size_t r = 0; r < runs; ++r) {
+    for (const std::size_t r : kept) {
       const EstimateRun& run = estimate(r);
       fr.landmark_nees_runs.push_back(run.nees.back().landmark);
       mse.push_back(run.mse);
@@ -350,7 +377,7 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     // Whether it has a posterior-mean row: from its runs that completed (it depends on the
     // spec alone).
     std::optional<bool> posterior;
-    for (std::size_t r = 0; r < runs; ++r) {
+    for (const std::size_t r : kept) {
       if (results[r][f].failure) continue;
       if (!posterior) posterior = results[r][f].posterior.has_value();
       if (results[r][f].posterior.has_value() != *posterior) {
@@ -382,6 +409,29 @@ nlohmann::json ratioJson(const std::vector<double>& x, const std::vector<double>
   if (!y) return nullptr;
   const PairedRatio r = pairedRatio(x, *y);
   return {{"ratio", finiteOrNull(r.ratio)}, {"ci95", finiteOrNull(r.ci95)}, {"pairs", r.pairs}};
+}
+
+/// The runs named in one line: consecutive seeds as a range ("seeds 1..1274, seed 1276"),
+/// other names as they are; past ten groups, how many more.
+std::string runList(const std::vector<std::string>& names) {
+  std::vector<std::string> groups;
+  const auto seedOf = [](const std::string& name) -> std::optional<std::uint64_t> {
+    if (name.rfind("seed ", 0) != 0) return std::nullopt;
+    return std::stoull(name.substr(5));
+  };
+  for (std::size_t i = 0; i < names.size();) {
+    const std::optional<std::uint64_t> first = seedOf(names[i]);
+    std::size_t j = i + 1;
+    while (first && j < names.size() && seedOf(names[j]) == *first + (j - i)) ++j;
+    groups.push_back(j - i > 1 ? "seeds " + std::to_string(*first) + ".." + std::to_string(*first + (j - i - 1))
+                               : names[i]);
+    i = j;
+  }
+  constexpr std::size_t kShown = 10;
+  std::string out;
+  for (std::size_t g = 0; g < std::min(groups.size(), kShown); ++g) out += (g == 0 ? "" : ", ") + groups[g];
+  if (groups.size() > kShown) out += " and " + std::to_string(groups.size() - kShown) + " more";
+  return out;
 }
 
 }  // namespace
@@ -429,6 +479,9 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
   for (const ConsistencyDataset& d : options.datasets) datasets.push_back(d.name);
   nlohmann::json j = {
       {"runs", result.runs},
+      {"runs_requested", result.runs_requested},
+      {"interrupted", result.interrupted},
+      {"run_names", result.run_names},
       {"steps", result.steps},
       {"world",
        {{"preset", std::string(worldPresetName(w.preset))},
@@ -437,7 +490,7 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
         {"landmarks", w.landmarks},
         {"steps", w.steps},
         {"seed_first", w.seed},
-        {"seed_last", w.seed + static_cast<std::uint64_t>(result.runs) - 1}}},
+        {"seed_last", w.seed + static_cast<std::uint64_t>(result.runs_requested) - 1}}},
       {"band95",
        {{"pose", {result.pose_band.lo, result.pose_band.hi}},
         {"landmark", {result.landmark_band.lo, result.landmark_band.hi}}}},
@@ -503,6 +556,10 @@ std::string consistencyTable(const ConsistencyResult& result) {
         << ratio(f.mse_aligned_runs, reference->mse_aligned_runs) << " |";
     }
     t << "\n";
+  }
+  if (result.interrupted) {
+    t << "\nInterrupted: " << result.runs << " of " << result.runs_requested
+      << " runs finished; the figures are theirs (" << runList(result.run_names) << ").\n";
   }
   t << "\nNEES: mean over " << result.runs << " runs after step " << result.steps << "; 95 % band for "
     << result.runs << " runs: pose [" << cell(result.pose_band.lo, 2) << ", " << cell(result.pose_band.hi, 2)

@@ -3,6 +3,8 @@
 #include <seif/core/errors.hpp>
 #include <seif/eval/run_loop.hpp>
 
+#include "core/binary_archive.hpp"
+
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -12,11 +14,7 @@
 namespace seif {
 
 void StepDigest::bytes(const void* data, std::size_t n) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < n; ++i) {
-    hash_ ^= p[i];
-    hash_ *= 0x100000001b3ULL;  // FNV-1a 64
-  }
+  hash_ = fnv1a64(std::string_view(static_cast<const char*>(data), n), hash_);
 }
 
 void StepDigest::add(const Step& step) {
@@ -76,12 +74,15 @@ void runStep(SlamFilter& filter, const Step& step, std::size_t k, const std::vec
       filter.update(step.observations);
       seconds += secondsBetween(t2, Clock::now());
     }
-  } catch (const Error& e) {  // seif's own: named with the step; anything else passes as it is
+  } catch (const Interrupted&) {
+    throw;
+  } catch (const Error& e) {  // seif's own: named with the step, its kind kept; anything else passes as it is
     std::ostringstream msg;
     msg << filter.name() << ": step " << k << " (t = ";
     if (std::abs(step.time) < 1e12) msg << std::fixed;  // else in exponent form, not 300 digits
     msg << step.time << "): " << e.what();
-    throw NumericError(msg.str());
+    if (dynamic_cast<const NumericError*>(&e) != nullptr) throw NumericError(msg.str());
+    throw ModelError(msg.str());  // what the filter or a model cannot do with this step's data
   }
   for (RunObserver* o : observers) o->afterUpdate(filter, step, k, seconds);
 }

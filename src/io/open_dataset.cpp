@@ -26,9 +26,17 @@ std::unique_ptr<EventSource> openDataset(const std::filesystem::path& path, Data
                       "records), g2o (a text file of VERTEX_SE2 / VERTEX_XY / EDGE_SE2 / EDGE_SE2_XY records)");
     }
   }
+  // Options of one format only: refused with another, as a flag that would be ignored.
+  const auto readAs = [&] { return path.string() + " is read as " + std::string(datasetFormatName(format)); };
   if (options.detections == Detections::Raw && format != DatasetFormat::VictoriaPark) {
-    throw InvalidArgument("raw detections are read from a Victoria Park folder only (tree_detections.txt); " +
-                          path.string() + " is read as " + std::string(datasetFormatName(format)));
+    throw InvalidArgument("raw detections are read from a Victoria Park folder only (tree_detections.txt); " + readAs());
+  }
+  if (options.robot != 1 && format != DatasetFormat::Mrclam) {
+    throw InvalidArgument("a robot number (" + std::to_string(options.robot) +
+                          ") selects one robot's log of an MRCLAM folder only; " + readAs());
+  }
+  if (options.isam_landmarks_as_gtsam && format != DatasetFormat::Isam) {
+    throw InvalidArgument("reading LANDMARK records as GTSAM does applies to an iSAM file only; " + readAs());
   }
   switch (format) {
     case DatasetFormat::Mrclam: return openMrclam(path, options);

@@ -10,6 +10,7 @@
 #include <seif/filters/seif_options.hpp>
 #include <seif/filters/slam_filter.hpp>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -161,6 +162,10 @@ struct BenchRequest {
   int iterations = 1;
   SeifOptions seif;
   AssociationOptions association;  ///< BenchCase::association, for every case
+  /// Set to true (from another thread or a signal handler) to stop the study before its next
+  /// case: the report holds the cases finished (BenchReport::interrupted). A case whose run
+  /// failed while stopping (its child ended by the same Ctrl-C) is left out.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// One (filter, N) of the study.
@@ -199,6 +204,7 @@ struct BenchReport {
   std::vector<BenchRow> rows;
   std::vector<BenchMeasurement> calibration;  ///< cases run only to extrapolate from
   BenchTargets targets;
+  bool interrupted = false;  ///< stopped (BenchRequest::stop) before every case was run
 };
 
 /// The table `seif bench` prints: its header, one line per case (measured or skipped), the

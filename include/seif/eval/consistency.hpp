@@ -18,6 +18,7 @@
 #include <seif/filters/factory.hpp>
 #include <seif/sim/world.hpp>
 
+#include <atomic>
 #include <cstddef>
 #include <filesystem>
 #include <functional>
@@ -56,6 +57,10 @@ struct ConsistencyOptions {
   /// (ConsistencyFilterResult::posterior_mean). It separates what the filter's information
   /// claims from how far its constant-time mean lags it. Costs one sparse solve per sample.
   bool posterior_mean = false;
+  /// Set to true (from another thread or a signal handler) to stop the study: the runs under
+  /// way stop after their step and are left out with those not started; the result holds
+  /// the runs every filter finished (ConsistencyResult::interrupted).
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// NEES of one filter at one instant: global and relative frame, pose and landmark (the
@@ -98,7 +103,12 @@ struct ConsistencyFilterResult {
 };
 
 struct ConsistencyResult {
-  int runs = 0;
+  int runs = 0;  ///< the runs summarised: all those asked for, unless interrupted
+  /// Stopped (ConsistencyOptions::stop) before every run finished: the figures are those of
+  /// the runs in `run_names`, out of `runs_requested`.
+  bool interrupted = false;
+  int runs_requested = 0;
+  std::vector<std::string> run_names;  ///< the runs summarised ("seed 6", or the dataset's)
   std::size_t steps = 0;
   Band pose_band;      ///< 95 % band of the mean of `runs` 3-dof NEES values
   Band landmark_band;  ///< 95 % band of the mean of `runs` 2-dof NEES values
@@ -111,7 +121,8 @@ struct ConsistencyResult {
 void checkConsistencyOptions(const ConsistencyOptions& options);
 
 /// Runs the study. `progress(done, total)` counts runs and is called from worker threads,
-/// one call at a time. A filter that stops with a NumericError in a run is listed in its
+/// one call at a time. Stopped (options.stop) before any run finished, it throws
+/// Interrupted. A filter that stops with a NumericError in a run is listed in its
 /// result's failed_runs, and the study goes on. Other errors throw, naming the run and the
 /// filter; InvalidArgument for runs < 1, samples < 1 or no filter.
 ConsistencyResult runConsistency(const ConsistencyOptions& options,

@@ -66,7 +66,7 @@ class StepDigest {
   void value(const T& v) {
     bytes(&v, sizeof v);
   }
-  std::uint64_t hash_ = 0xcbf29ce484222325ULL;
+  std::uint64_t hash_ = 0xcbf29ce484222325ULL;  // FNV-1a's offset basis
 };
 
 /// Between predict and update of step k: may rewrite `observations` (initially the step's)
@@ -96,8 +96,11 @@ struct RunLoopOptions {
 /// Runs the steps of `data` from options.start_step through `filter` (until options.stop),
 /// then finish().
 /// A seif::Error inside a step (the filter's or the association hook's) is rethrown as
-/// NumericError "<filter name>: step k (t = <time>): <what>"; any other exception (a
-/// caller's own, a Python error from a hook) passes unchanged. Returns the steps run.
+/// "<filter name>: step k (t = <time>): <what>", its kind kept: a NumericError as a
+/// NumericError (the filter failed numerically), any other as a ModelError (what the filter
+/// or a model cannot do with the step's data: an observation without an id under known
+/// association, a degenerate sighting); Interrupted and any other exception (a caller's
+/// own, a Python error from a hook) pass unchanged. Returns the steps run.
 std::size_t runLoop(SlamFilter& filter, const Dataset& data, const std::vector<RunObserver*>& observers,
                     const RunLoopOptions& options = {});
 
