@@ -3,6 +3,7 @@
 // release the GIL; progress callbacks re-acquire it (bindings.hpp: pythonCallback).
 #include "bindings.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/eval/association_ceiling.hpp>
 #include <seif/eval/bench.hpp>
 #include <seif/eval/consistency.hpp>
@@ -11,6 +12,9 @@
 #include <seif/eval/run_dataset.hpp>
 #include <seif/eval/stats.hpp>
 
+#include <csignal>
+#include <signal.h>
+
 #include <atomic>
 #include <exception>
 #include <limits>
@@ -18,6 +22,48 @@
 
 namespace seif::python {
 namespace {
+
+// A study (consistency, bench) runs in C++ for minutes with the GIL released: Python's SIGINT
+// handler, which only flags the signal for the main thread's next bytecode, would not stop
+// it. While a SigintStops lives, SIGINT sets its flag (the study's stop) instead; the
+// handler before it is restored after, and the binding raises KeyboardInterrupt.
+std::atomic<std::atomic<bool>*> g_sigint_flag{nullptr};
+extern "C" void flagSigint(int) {
+  if (std::atomic<bool>* flag = g_sigint_flag.load()) flag->store(true, std::memory_order_relaxed);
+}
+
+class SigintStops {
+ public:
+  explicit SigintStops(std::atomic<bool>& flag) {
+    std::atomic<bool>* none = nullptr;
+    if (!g_sigint_flag.compare_exchange_strong(none, &flag)) return;  // a study under way keeps it
+    struct sigaction action {};
+    action.sa_handler = flagSigint;
+    sigemptyset(&action.sa_mask);
+    installed_ = sigaction(SIGINT, &action, &before_) == 0;
+    if (!installed_) g_sigint_flag.store(nullptr);
+  }
+  ~SigintStops() {
+    if (!installed_) return;
+    sigaction(SIGINT, &before_, nullptr);
+    g_sigint_flag.store(nullptr);
+  }
+  SigintStops(const SigintStops&) = delete;
+  SigintStops& operator=(const SigintStops&) = delete;
+
+ private:
+  struct sigaction before_ {};
+  bool installed_ = false;
+};
+
+/// Raises KeyboardInterrupt(message) carrying what the stopped study finished as `.result`.
+[[noreturn]] void raiseInterrupted(const std::string& message, const py::object& result) {
+  const py::object error = py::reinterpret_steal<py::object>(PyObject_CallFunction(PyExc_KeyboardInterrupt, "s", message.c_str()));
+  if (!error) throw py::error_already_set();
+  error.attr("result") = result;
+  PyErr_SetObject(PyExc_KeyboardInterrupt, error.ptr());
+  throw py::error_already_set();
+}
 
 /// (n, 4) array [t, x, y, theta] of a list of TimedPose.
 Eigen::MatrixXd poseArray(const std::vector<TimedPose>& poses) {
@@ -527,13 +573,33 @@ void bindConsistency(py::module_& m) {
       .def_readonly("filters", &ConsistencyResult::filters, py::return_value_policy::copy);
   m.def(
       "run_consistency",
-      [](const ConsistencyOptions& options, const py::object& progress) {
+      [](ConsistencyOptions options, const py::object& progress) {
         const auto callback = pythonCallback<std::size_t, std::size_t>(progress);
-        py::gil_scoped_release release;
-        return runConsistency(options, callback);
+        std::atomic<bool> stop{false};
+        options.stop = &stop;
+        ConsistencyResult result;
+        std::optional<std::string> none_finished;
+        {
+          const SigintStops sigint(stop);
+          py::gil_scoped_release release;
+          try {
+            result = runConsistency(options, callback);
+          } catch (const Interrupted& e) {  // stopped before any run finished
+            none_finished = e.what();
+          }
+        }
+        if (none_finished) raiseInterrupted(*none_finished, py::none());
+        if (result.interrupted) {
+          raiseInterrupted("consistency interrupted: " + std::to_string(result.runs) + " of " +
+                               std::to_string(result.runs_requested) + " runs finished (their result: .result)",
+                           py::cast(result));
+        }
+        return result;
       },
       py::arg("options"), py::arg("progress") = py::none(),
-      "Runs the NEES study on worker threads; progress(done, total) counts runs.");
+      "Runs the NEES study on worker threads; progress(done, total) counts runs. Ctrl-C (SIGINT) stops "
+      "it: the runs under way stop after their step, and KeyboardInterrupt is raised with the runs every "
+      "filter finished as its .result (a ConsistencyResult, interrupted=True; None when none had).");
   m.def(
       "measure_nees",
       [](const SlamFilter& filter, const Pose2& true_pose, const std::map<int, Vec2>& truth,
@@ -676,18 +742,28 @@ void bindBench(py::module_& m) {
       .def("summary_text", &benchSummaryText, "the table `seif bench` prints (its rows and targets)");
   m.def(
       "run_bench",
-      [](const BenchRequest& request, const py::object& row_done) {
+      [](BenchRequest request, const py::object& row_done) {
         const auto callback = pythonCallback<const BenchRow&>(row_done);
-        py::gil_scoped_release release;
-        return runBench(request, [&](const BenchRow& row) {
-          if (callback) callback(row);
-          py::gil_scoped_acquire gil;  // Ctrl-C stops the study after the case it is in
-          if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-        });
+        std::atomic<bool> stop{false};
+        request.stop = &stop;
+        BenchReport report;
+        {
+          const SigintStops sigint(stop);
+          py::gil_scoped_release release;
+          report = runBench(request, callback);
+        }
+        if (report.interrupted) {
+          raiseInterrupted("bench interrupted after " + std::to_string(report.rows.size()) +
+                               " cases (the report: .result)",
+                           py::cast(report));
+        }
+        return report;
       },
       py::arg("request"), py::arg("row_done") = py::none(),
       "`seif bench` as one call: every (filter, N) measured in forked children; row_done(row) follows "
-      "each case, measured or skipped. Returns a BenchReport (.json() is bench.json).");
+      "each case, measured or skipped. Returns a BenchReport (.json() is bench.json). Ctrl-C (SIGINT) "
+      "stops the study before its next case and raises KeyboardInterrupt with the cases finished as its "
+      ".result (a BenchReport, interrupted=True).");
   m.def("bench_json", &benchJson, py::arg("report"));
 }
 

@@ -1,6 +1,8 @@
 """The experiments' library entry points from Python (GIL released, callbacks re-acquire)."""
 import json
 import math
+import os
+import signal
 import threading
 
 import numpy as np
@@ -88,6 +90,54 @@ def test_consistency_runs_on_threads_with_a_progress_callback():
     assert stopped and all(f.run in ("seed 5", "seed 6", "seed 7") for f in stopped)
     assert "conservative sparsification" in stopped[0].error
     assert sum(math.isnan(v) for v in result.filters[1].landmark_nees_runs) == len(stopped)
+
+
+def test_ctrl_c_stops_a_consistency_study_and_keeps_the_runs_it_finished():
+    """SIGINT while the study runs (sent here from the progress callback after two runs, one
+    thread): KeyboardInterrupt, whose .result summarises the runs finished as a study of those
+    alone would. Python's own handler is back afterwards."""
+    options = seif.ConsistencyOptions()
+    options.world = seif.preset_config("paper", 20, 60, 1)
+    options.runs = 50
+    options.samples = 4
+    options.threads = 1
+    options.filters = [seif.parse_filter_spec("ekf")]
+
+    def ctrl_c_after_two(done, total):
+        if done == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt, match="2 of 50 runs finished") as stopped:
+        seif.run_consistency(options, ctrl_c_after_two)
+    assert signal.getsignal(signal.SIGINT) is before
+    partial = stopped.value.result
+    assert partial.interrupted and partial.runs == 2 and partial.runs_requested == 50
+    assert partial.run_names == ["seed 1", "seed 2"]
+    options.runs = 2
+    whole = seif.run_consistency(options)
+    assert not whole.interrupted
+    assert partial.filters[0].mse_runs == whole.filters[0].mse_runs
+    assert json.loads(seif.consistency_json(partial, options))["interrupted"] is True
+
+
+def test_ctrl_c_stops_a_bench_study_before_its_next_case():
+    request = seif.BenchRequest()
+    request.filters = ["ekf"]
+    request.landmarks = [100, 150, 200]
+    request.window = 10
+    request.repeat = 1
+    rows = []
+
+    def ctrl_c_after_the_first(row):
+        rows.append(row)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt, match="after 1 cases") as stopped:
+        seif.run_bench(request, ctrl_c_after_the_first)
+    report = stopped.value.result
+    assert report.interrupted and [r.landmarks for r in report.rows] == [100] == [r.landmarks for r in rows]
+    assert json.loads(report.json())["interrupted"] is True
 
 
 def test_bench_case_and_cost_model():
