@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <cstdint>
 
 #include <cmath>
@@ -217,6 +218,42 @@ TEST(PaperStudy, RunPaperIsItsRunsWhateverTheThreadsAndWritesItsFiles) {
   request.runs = 2;
   request.seed = UINT64_MAX;
   EXPECT_THROW(seif::checkPaperRequest(request), seif::InvalidArgument);
+}
+
+// Stopped once two runs are done (one thread: in order), the study runs no other and
+// summarises the two as a study of those alone would, and says so; stopped before any run,
+// it throws Interrupted.
+TEST(PaperStudy, AStoppedStudyKeepsTheRunsThatRan) {
+  seif::PaperRequest request;
+  request.runs = 20;
+  request.seed = 11;
+  request.options.steps = 60;
+  request.jobs = 1;
+  std::atomic<bool> stop{false};
+  request.stop = &stop;
+  const seif::PaperReport stopped = seif::runPaper(request, [&](std::size_t done, std::size_t) {
+    if (done == 2) stop = true;
+  });
+  EXPECT_TRUE(stopped.interrupted);
+  EXPECT_EQ(stopped.request.stop, nullptr);
+  ASSERT_EQ(stopped.runs.size(), 2u);
+  EXPECT_TRUE(stopped.failed.empty());
+  request.runs = 2;
+  request.stop = nullptr;
+  const seif::PaperReport two = seif::runPaper(request);
+  EXPECT_FALSE(two.interrupted);
+  for (std::size_t f = 0; f < two.summaries.size(); ++f) {
+    EXPECT_EQ(stopped.summaries[f].error.mean, two.summaries[f].error.mean) << f;
+  }
+  EXPECT_NE(seif::paperSummaryText(stopped).find("Interrupted: 2 of 20 runs ran"), std::string::npos);
+  EXPECT_EQ(seif::paperSummaryText(two).find("Interrupted"), std::string::npos);
+  const auto dir = seif::test::scratchDir("paper-interrupted");
+  seif::writePaperResults(stopped, dir);
+  const nlohmann::json j = nlohmann::json::parse(seif::test::slurp(dir / "results.json"));
+  EXPECT_TRUE(j["setup"]["interrupted"].get<bool>());
+  EXPECT_EQ(j["setup"]["runs_ok"], 2);
+  request.stop = &stop;  // still set
+  EXPECT_THROW(seif::runPaper(request), seif::Interrupted);
 }
 
 // One run gives no confidence interval: its cells print the mean alone (the paper's column

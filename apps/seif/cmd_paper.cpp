@@ -4,7 +4,9 @@
 // (scripts/figures/paper.py).
 #include "commands.hpp"
 #include "options.hpp"
+#include "stop_signals.hpp"
 
+#include <seif/core/errors.hpp>
 #include <seif/eval/paper.hpp>
 #include <seif/filters/factory.hpp>
 #include "eval/parallel.hpp"
@@ -50,6 +52,8 @@ void paperCommand(const PaperArgs& args) {
   std::fflush(stdout);
   PaperReport report;
   {
+    const StopOnSignals stop_on_signals;  // Ctrl-C: the runs that ran are summarised and written
+    request.stop = StopOnSignals::flag();
     Progress progress("seif paper");
     report = runPaper(request, [&](std::size_t done, std::size_t all) { progress(done, all); });
   }
@@ -66,6 +70,11 @@ void paperCommand(const PaperArgs& args) {
   if (!args.no_figures && renderFigure("paper.py", {args.out})) {
     std::printf("figures: %s/fig1_ekf.png, fig2_seif.png, fig6_compare.png%s\n", args.out.c_str(),
                 args.sweep_active.empty() ? "" : ", sweep_active.png");
+  }
+  if (report.interrupted) {
+    std::fflush(stdout);
+    throw Interrupted("paper interrupted: " + std::to_string(report.runs.size() + report.failed.size()) + " of " +
+                      std::to_string(args.runs) + " runs ran; their results are in " + args.out);
   }
 }
 
@@ -86,7 +95,9 @@ void addPaperCommand(CLI::App& app) {
       "(non-zero off-diagonal blocks of the information matrix) and the median time per update.\n"
       "Writes OUT/results.json, OUT/table.md, OUT/figure_data/ and the figures fig1_ekf.png,\n"
       "fig2_seif.png, fig6_compare.png (and sweep_active.png), rendered by\n"
-      "scripts/figures/paper.py with /usr/bin/python3 and matplotlib.");
+      "scripts/figures/paper.py with /usr/bin/python3 and matplotlib. Ctrl-C (or SIGTERM) stops\n"
+      "the study: the runs under way finish, those that ran are summarised and written\n"
+      "(results.json \"interrupted\": true), and the exit status is 130.");
   cmd->add_option("--runs", args->runs, "number of independent runs")
       ->transform(integerIn(1, INT_MAX))
       ->capture_default_str();

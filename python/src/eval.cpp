@@ -486,6 +486,7 @@ void bindPaper(py::module_& m) {
       .def_readonly("specs", &PaperReport::specs, py::return_value_policy::copy)
       .def_readonly("runs", &PaperReport::runs, py::return_value_policy::copy)
       .def_readonly("failed", &PaperReport::failed, py::return_value_policy::copy)
+      .def_readonly("interrupted", &PaperReport::interrupted, "stopped before every run had started")
       .def_readonly("summaries", &PaperReport::summaries, py::return_value_policy::copy)
       .def_readonly("typical", &PaperReport::typical, "index into runs of the figures' run")
       .def("summary_text", &paperSummaryText, "what `seif paper` prints")
@@ -493,14 +494,33 @@ void bindPaper(py::module_& m) {
            "writes DIR/results.json, DIR/table.md and DIR/figure_data/ as `seif paper` does");
   m.def(
       "run_paper",
-      [](const PaperRequest& request, const py::object& progress) {
+      [](PaperRequest request, const py::object& progress) {
         const auto callback = pythonCallback<std::size_t, std::size_t>(progress);
-        py::gil_scoped_release release;
-        return std::make_unique<PaperReport>(runPaper(request, callback));
+        std::atomic<bool> stop{false};
+        request.stop = &stop;
+        std::unique_ptr<PaperReport> report;
+        std::optional<std::string> none_ran;
+        {
+          const SigintStops sigint(stop);
+          py::gil_scoped_release release;
+          try {
+            report = std::make_unique<PaperReport>(runPaper(request, callback));
+          } catch (const Interrupted& e) {  // stopped before any run succeeded
+            none_ran = e.what();
+          }
+        }
+        if (none_ran) raiseInterrupted(*none_ran, py::none());
+        if (report->interrupted) {
+          const std::string what = "paper interrupted: " + std::to_string(report->runs.size() + report->failed.size()) +
+                                   " of " + std::to_string(request.runs) + " runs ran (their report: .result)";
+          raiseInterrupted(what, py::cast(std::move(report)));
+        }
+        return report;
       },
       py::arg("request"), py::arg("progress") = py::none(),
       "`seif paper` as one call: request.runs runs of the paper world on worker threads, summarised; "
-      "progress(done, total) counts runs.");
+      "progress(done, total) counts runs. Ctrl-C (SIGINT) stops it: no run starts after it, and "
+      "KeyboardInterrupt is raised with the report of the runs that ran as its .result.");
 
   py::class_<FilterSnapshot::Link>(m, "SnapshotLink")
       .def_readonly("a", &FilterSnapshot::Link::a)

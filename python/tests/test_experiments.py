@@ -121,6 +121,23 @@ def test_ctrl_c_stops_a_consistency_study_and_keeps_the_runs_it_finished():
     assert json.loads(seif.consistency_json(partial, options))["interrupted"] is True
 
 
+def test_ctrl_c_stops_the_paper_study_and_keeps_the_runs_that_ran():
+    request = seif.PaperRequest()
+    request.runs = 20
+    request.jobs = 1
+    request.options.steps = 60
+
+    def ctrl_c_after_two(done, total):
+        if done == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt, match="2 of 20 runs ran") as stopped:
+        seif.run_paper(request, ctrl_c_after_two)
+    report = stopped.value.result
+    assert report.interrupted and len(report.runs) == 2
+    assert "Interrupted: 2 of 20 runs ran" in report.summary_text()
+
+
 def test_ctrl_c_stops_a_bench_study_before_its_next_case():
     request = seif.BenchRequest()
     request.filters = ["ekf"]

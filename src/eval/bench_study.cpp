@@ -340,6 +340,7 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
   }
   BenchReport report;
   report.request = request;
+  report.request.stop = nullptr;  // the request's flag need not outlive the call
   BenchRequest& args = report.request;
   std::sort(args.landmarks.begin(), args.landmarks.end());
   args.landmarks.erase(std::unique(args.landmarks.begin(), args.landmarks.end()), args.landmarks.end());

@@ -339,11 +339,23 @@ void fillTables(const PaperReport& report, PaperTables& t) {
 
 }  // namespace
 
+namespace {
+
+/// The line of a stopped study: how many of the runs asked for ran.
+std::string interruptedNote(const PaperReport& report) {
+  return "Interrupted: " + std::to_string(report.runs.size() + report.failed.size()) + " of " +
+         std::to_string(report.request.runs) + " runs ran; the figures are those of the " +
+         std::to_string(report.runs.size()) + " that succeeded.";
+}
+
+}  // namespace
+
 std::string paperSummaryText(const PaperReport& report) {
   PaperTables t;
   fillTables(report, t);
   std::ostringstream text;
   text << "\n" << t.table.text() << "\n" << t.notes.str();
+  if (report.interrupted) text << interruptedNote(report) << "\n";
   if (!report.request.options.sweep_active.empty()) {
     text << "\nConstant-time SEIF against theta_x (K = " << report.request.options.relax
          << "; the journal version, N = 50: error / EKF 1.521 at theta_x = 6, 1.110 at 10, the latter at 1/6 of "
@@ -377,6 +389,7 @@ void writePaperResults(const PaperReport& report, const std::filesystem::path& d
       {"experiment", "Thrun et al. 2002 (WAFR), section 4: EKF vs SEIF with exact mean vs constant-time SEIF"},
       {"runs", total},
       {"runs_ok", n_runs},
+      {"interrupted", report.interrupted},  // stopped: runs_ok + failed_runs < runs
       {"seed", request.seed},
       {"seeds", "run r uses simulator seed " + std::to_string(request.seed) + " + r"},
       {"jobs", jobs},
@@ -537,6 +550,7 @@ void writePaperResults(const PaperReport& report, const std::filesystem::path& d
       md << t.beyond.markdown();
     }
     if (!failed.empty()) md << "\n" << failed.size() << " run(s) failed and are left out (results.json: failed_runs).\n";
+    if (report.interrupted) md << "\n" << interruptedNote(report) << "\n";
     writeFileAtomically(dir / "table.md", md.str());
   }
 

@@ -37,6 +37,7 @@ PaperReport runPaper(const PaperRequest& request, const std::function<void(std::
   checkPaperRequest(request);
   PaperReport report;
   report.request = request;
+  report.request.stop = nullptr;  // the request's flag need not outlive the call
   report.specs = paperFilters(request.options);
   report.world = paperWorld(request.seed, request.options);
   const std::size_t total = static_cast<std::size_t>(request.runs);
@@ -45,9 +46,13 @@ PaperReport runPaper(const PaperRequest& request, const std::function<void(std::
   // Each run is independent and stored by index: the results do not depend on the threads.
   std::vector<std::optional<PaperRun>> results(total);
   std::vector<std::string> failures(total);
+  std::vector<char> ran(total, 0);
+  const auto stopping = [&] { return request.stop != nullptr && request.stop->load(std::memory_order_relaxed); };
   parallelFor(
       total, report.jobs,
       [&](std::size_t r) {
+        if (stopping()) return;
+        ran[r] = 1;
         try {
           results[r] = runPaperExperiment(request.seed + r, request.options);
         } catch (const std::exception& e) {
@@ -56,12 +61,15 @@ PaperReport runPaper(const PaperRequest& request, const std::function<void(std::
       },
       progress);
   for (std::size_t r = 0; r < total; ++r) {
-    if (results[r]) {
+    if (!ran[r]) {
+      report.interrupted = true;
+    } else if (results[r]) {
       report.runs.push_back(std::move(*results[r]));
     } else {
       report.failed.push_back({request.seed + r, failures[r]});
     }
   }
+  if (report.runs.empty() && report.interrupted) throw Interrupted("paper: stopped before any run succeeded");
   if (report.runs.empty()) throw NumericError("every run failed");
   for (std::size_t f = 0; f < report.specs.size(); ++f) {
     report.summaries.push_back(summarizePaperFilter(f, report.runs));

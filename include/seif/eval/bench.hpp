@@ -220,7 +220,8 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
 
 BenchTargets benchTargets(const std::vector<BenchMeasurement>& measured);
 
-/// bench.json: {"machine", "config", "results" (one per row), "calibration", "targets"}.
+/// bench.json: {"machine", "config", "results" (one per row), "calibration", "targets",
+/// "interrupted"}.
 std::string benchJson(const BenchReport& report);
 
 }  // namespace seif

@@ -134,7 +134,7 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
 NeesPoint measureNees(const SlamFilter& filter, const Pose2& true_pose, const std::map<int, Vec2>& truth,
                       const Eigen::VectorXd* mean = nullptr);
 
-/// nees.json: {"runs", "steps", "band95": {"pose": [lo, hi], "landmark": [lo, hi]},
+/// nees.json: {"runs", "runs_requested", "interrupted", "run_names", "steps", "band95": {"pose": [lo, hi], "landmark": [lo, hi]},
 /// "sample_steps", "filters": [{"name", "filter_spec", "estimate" ("own" | "posterior_mean"), "pose_nees_final", "landmark_nees_final",
 /// "pose_nees_relative_final", "landmark_nees_relative_final", "error_final",
 /// "error_aligned_final", "mse_final", "mse_aligned_final", "mse_runs", "mse_aligned_runs",

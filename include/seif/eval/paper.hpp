@@ -15,6 +15,7 @@
 #include <seif/sim/world.hpp>
 
 #include <Eigen/Core>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -134,6 +135,9 @@ struct PaperRequest {
   std::uint64_t seed = 1;  ///< run r uses simulator seed seed + r
   unsigned jobs = 0;       ///< threads; 0: the number of cores (results do not depend on it)
   PaperOptions options;
+  /// Set to true (from another thread or a signal handler) to stop the study: no run starts
+  /// after it, the runs under way finish, and the report holds them (PaperReport::interrupted).
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// A run that failed and is left out of the statistics.
@@ -149,6 +153,9 @@ struct PaperReport {
   std::vector<PaperFilterSpec> specs;         ///< paperFilters(request.options)
   std::vector<PaperRun> runs;                 ///< the successful runs, in seed order
   std::vector<PaperFailure> failed;           ///< in seed order
+  /// Stopped (PaperRequest::stop) before every run had started: `runs` and `failed` hold
+  /// those that ran, the others are in neither.
+  bool interrupted = false;
   std::vector<PaperFilterSummary> summaries;  ///< one per spec
   /// The figures' run, chosen by a rule fixed in advance: the run whose constant-time SEIF
   /// has the median final error (the lower median for an even count), run again with its
@@ -162,7 +169,8 @@ void checkPaperRequest(const PaperRequest& request);
 
 /// Runs the study on the experiments' thread pool (eval/parallel.hpp); `progress(done,
 /// total)` counts runs, one call at a time. A failed run is recorded, not thrown; throws
-/// NumericError when every run failed, and what checkPaperRequest() throws.
+/// NumericError when every run failed, Interrupted when stopped before any run succeeded,
+/// and what checkPaperRequest() throws.
 PaperReport runPaper(const PaperRequest& request,
                      const std::function<void(std::size_t, std::size_t)>& progress = {});
 
