@@ -279,6 +279,7 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     return real ? options.datasets[r].name : "seed " + std::to_string(options.world.seed + r);
   };
   auto runFilters = [&](std::size_t r) {
+    if (stopping()) return;  // left out, its world not even simulated
     WorldConfig world = options.world;
     world.seed = options.world.seed + r;
     const Dataset data = real ? Dataset() : buildDataset(simulate(world));
