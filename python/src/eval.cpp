@@ -25,8 +25,10 @@ namespace {
 
 // A study (consistency, bench) runs in C++ for minutes with the GIL released: Python's SIGINT
 // handler, which only flags the signal for the main thread's next bytecode, would not stop
-// it. While a SigintStops lives, SIGINT sets its flag (the study's stop) instead; the
-// handler before it is restored after, and the binding raises KeyboardInterrupt.
+// it. While a SigintStops lives (made on the main thread), SIGINT sets its flag (the study's
+// stop) instead; the handler before it is restored after, and the binding raises
+// KeyboardInterrupt. On another thread a study runs to its end, as Python's Ctrl-C goes to
+// the main thread.
 std::atomic<std::atomic<bool>*> g_sigint_flag{nullptr};
 extern "C" void flagSigint(int) {
   if (std::atomic<bool>* flag = g_sigint_flag.load()) flag->store(true, std::memory_order_relaxed);
@@ -35,6 +37,9 @@ extern "C" void flagSigint(int) {
 class SigintStops {
  public:
   explicit SigintStops(std::atomic<bool>& flag) {
+    // Only on the main thread, where Python itself takes Ctrl-C (the GIL is held here).
+    const py::module_ threading = py::module_::import("threading");
+    if (!threading.attr("current_thread")().is(threading.attr("main_thread")())) return;
     std::atomic<bool>* none = nullptr;
     if (!g_sigint_flag.compare_exchange_strong(none, &flag)) return;  // a study under way keeps it
     struct sigaction action {};

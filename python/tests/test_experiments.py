@@ -4,6 +4,7 @@ import math
 import os
 import signal
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -119,6 +120,26 @@ def test_ctrl_c_stops_a_consistency_study_and_keeps_the_runs_it_finished():
     assert not whole.interrupted
     assert partial.filters[0].mse_runs == whole.filters[0].mse_runs
     assert json.loads(seif.consistency_json(partial, options))["interrupted"] is True
+    # From another thread the study leaves SIGINT to Python: Python's handler (here one that
+    # records it) runs on the main thread, and the study runs to its end.
+    seen, caught = {}, []
+
+    def ctrl_c_after_one(done, total):
+        if done == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        worker = threading.Thread(target=lambda: seen.update(result=seif.run_consistency(options, ctrl_c_after_one)))
+        worker.start()
+        worker.join()
+        deadline = time.monotonic() + 10
+        while not caught and time.monotonic() < deadline:  # should the handler not have run yet
+            time.sleep(0.01)
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert caught == [signal.SIGINT]
+    assert seen["result"].runs == 2 and not seen["result"].interrupted
 
 
 def test_ctrl_c_stops_the_paper_study_and_keeps_the_runs_that_ran():
