@@ -300,6 +300,20 @@ TEST(RunLoop, AFailureInsideAStepNamesTheFilterTheStepAndItsTime) {
   EXPECT_THROW(runLoop(*again, w.data, {}, options), Mine);
 }
 
+// Once the stop flag is set no task starts: with one thread, the three tasks before it ran.
+TEST(Parallel, NoTaskStartsOnceStopped) {
+  std::atomic<bool> stop{false};
+  std::vector<int> ran;
+  parallelFor(10, 1, [&](std::size_t i) { ran.push_back(static_cast<int>(i)); },
+              [&](std::size_t done, std::size_t) {
+                if (done == 3) stop = true;
+              },
+              &stop);
+  EXPECT_EQ(ran, (std::vector<int>{0, 1, 2}));
+  EXPECT_TRUE(stopRequested(&stop));
+  EXPECT_FALSE(stopRequested(nullptr));
+}
+
 TEST(Parallel, RunsEveryTaskOnceAndRethrowsTheFirstFailure) {
   std::vector<std::atomic<int>> hits(50);
   std::size_t last_done = 0;

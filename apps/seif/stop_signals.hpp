@@ -17,7 +17,8 @@ class StopOnSignals {
   StopOnSignals(const StopOnSignals&) = delete;
   StopOnSignals& operator=(const StopOnSignals&) = delete;
 
-  /// Set by the handler; for RunRequest::stop, ConsistencyOptions::stop, BenchRequest::stop.
+  /// Set by the handler; for RunRequest::stop, ConsistencyOptions::stop, BenchRequest::stop,
+  /// PaperRequest::stop.
   static const std::atomic<bool>* flag();
 
  private:

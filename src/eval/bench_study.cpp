@@ -4,6 +4,7 @@
 #include <seif/eval/bench.hpp>
 #include <seif/sim/world.hpp>
 
+#include "eval/parallel.hpp"
 #include "json_fields.hpp"
 #include "text_format.hpp"
 
@@ -243,7 +244,7 @@ Repeated runRepeated(const BenchCase& c, int repeat, unsigned timeout_seconds, d
   for (int i = 0; i < runs; ++i) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (i >= repeat && elapsed > max_seconds) break;
-    if (i > 0 && stop != nullptr && stop->load(std::memory_order_relaxed)) break;  // the runs so far
+    if (i > 0 && stopRequested(stop)) break;  // the runs so far
     Outcome o = runIsolated(c, timeout_seconds);
     if (!o.measurement) {
       if (!r.best.measurement) r.best = o;
@@ -351,11 +352,10 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
   // A child that runs far past its estimate is stopped (the estimate was wrong).
   const auto timeout = static_cast<unsigned>(std::min(86400.0, 10.0 * args.max_seconds + 60.0));
   std::vector<BenchMeasurement> measured;
-  const auto stopping = [&] { return request.stop != nullptr && request.stop->load(std::memory_order_relaxed); };
   for (const std::string& filter : args.filters) {
     std::vector<BenchPoint> points;
     for (const int n : args.landmarks) {
-      if (stopping()) {
+      if (stopRequested(request.stop)) {
         report.interrupted = true;
         break;
       }
@@ -376,7 +376,7 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
         BenchCase cal = c;
         cal.landmarks = kCalibrationLandmarks;
         const Outcome o = runIsolated(cal, timeout);
-        if (!o.measurement && stopping()) {  // its child ended by the same Ctrl-C
+        if (!o.measurement && stopRequested(request.stop)) {  // its child ended by the same Ctrl-C
           report.interrupted = true;
           break;
         }
@@ -392,7 +392,7 @@ BenchReport runBench(const BenchRequest& request, const std::function<void(const
       }
       if (row.skipped.empty()) {
         Repeated rep = runRepeated(c, args.repeat, timeout, args.max_seconds, request.stop);
-        if (!rep.best.measurement && stopping()) {  // its child ended by the same Ctrl-C
+        if (!rep.best.measurement && stopRequested(request.stop)) {  // its child ended by the same Ctrl-C
           report.interrupted = true;
           break;
         }

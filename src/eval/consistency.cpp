@@ -274,12 +274,10 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
   std::vector<std::vector<FilterRun>> results(runs);  // [run][filter]
   std::vector<std::size_t> steps_of_run(runs, 0);
   std::vector<char> finished(runs, 0);  // every filter ran the whole run (not stopped)
-  const auto stopping = [&] { return options.stop != nullptr && options.stop->load(std::memory_order_relaxed); };
   const auto runName = [&](std::size_t r) {
     return real ? options.datasets[r].name : "seed " + std::to_string(options.world.seed + r);
   };
   auto runFilters = [&](std::size_t r) {
-    if (stopping()) return;  // left out, its world not even simulated
     WorldConfig world = options.world;
     world.seed = options.world.seed + r;
     const Dataset data = real ? Dataset() : buildDataset(simulate(world));
@@ -290,7 +288,7 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     steps_of_run[r] = run_data.steps.size();
     for (const FilterSpec& spec : options.filters) {
       try {
-        if (stopping()) return;  // left out: results[r] is not read
+        if (stopRequested(options.stop)) return;  // left out: results[r] is not read
         std::optional<FilterRun> run =
             runOne(spec, run_data, config, start, samples, world.seed, options.posterior_mean, options.stop);
         if (!run) return;
@@ -311,7 +309,7 @@ ConsistencyResult runConsistency(const ConsistencyOptions& options,
     }
     finished[r] = 1;
   };
-  parallelFor(runs, options.threads, runFilters, progress);
+  parallelFor(runs, options.threads, runFilters, progress, options.stop);  // stopped: the runs not started are left out
 
   std::vector<std::size_t> kept;  // the runs summarised
   for (std::size_t r = 0; r < runs; ++r) {

@@ -46,12 +46,10 @@ PaperReport runPaper(const PaperRequest& request, const std::function<void(std::
   // Each run is independent and stored by index: the results do not depend on the threads.
   std::vector<std::optional<PaperRun>> results(total);
   std::vector<std::string> failures(total);
-  std::vector<char> ran(total, 0);
-  const auto stopping = [&] { return request.stop != nullptr && request.stop->load(std::memory_order_relaxed); };
+  std::vector<char> ran(total, 0);  // not all when stopped: no run starts after the stop
   parallelFor(
       total, report.jobs,
       [&](std::size_t r) {
-        if (stopping()) return;
         ran[r] = 1;
         try {
           results[r] = runPaperExperiment(request.seed + r, request.options);
@@ -59,7 +57,7 @@ PaperReport runPaper(const PaperRequest& request, const std::function<void(std::
           failures[r] = e.what();
         }
       },
-      progress);
+      progress, request.stop);
   for (std::size_t r = 0; r < total; ++r) {
     if (!ran[r]) {
       report.interrupted = true;

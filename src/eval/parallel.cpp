@@ -16,13 +16,14 @@ unsigned threadCount(unsigned requested, std::size_t tasks) {
 }
 
 void parallelFor(std::size_t count, unsigned threads, const std::function<void(std::size_t)>& task,
-                 const std::function<void(std::size_t, std::size_t)>& done) {
+                 const std::function<void(std::size_t, std::size_t)>& done, const std::atomic<bool>* stop) {
   std::atomic<std::size_t> next{0};
   std::size_t finished = 0;
   std::mutex mutex;  // guards `finished`, `done` and `failure`
   std::exception_ptr failure;
   auto worker = [&] {
     for (std::size_t i = next++; i < count; i = next++) {
+      if (stopRequested(stop)) return;
       try {
         task(i);
         const std::lock_guard<std::mutex> lock(mutex);

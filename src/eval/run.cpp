@@ -2,6 +2,7 @@
 #include <seif/eval/run.hpp>
 #include <seif/eval/run_loop.hpp>
 
+#include "eval/parallel.hpp"
 #include "run_checkpoint.hpp"
 #include <seif/models/odometry_model.hpp>
 
@@ -210,7 +211,7 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
     // A stop after the last step, before or during those removals: the run is interrupted
     // there, and its checkpoint (the state the removals stopped in) finishes them when resumed.
     const bool kept = associator->counts().provisional_final > 0 && !filter.smoother();
-    if (!out.failure && !out.interrupted && kept && stop != nullptr && stop->load(std::memory_order_relaxed)) {
+    if (!out.failure && !out.interrupted && kept && stopRequested(stop)) {
       out.interrupted = true;
       if (!checkpointing.path.empty()) checkpoints.onStop(filter, consumed);
     }

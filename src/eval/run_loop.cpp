@@ -4,6 +4,7 @@
 #include <seif/eval/run_loop.hpp>
 
 #include "core/binary_archive.hpp"
+#include "eval/parallel.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -87,10 +88,6 @@ void runStep(SlamFilter& filter, const Step& step, std::size_t k, const std::vec
   for (RunObserver* o : observers) o->afterUpdate(filter, step, k, seconds);
 }
 
-bool stopRequested(const RunLoopOptions& options) {
-  return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
-}
-
 /// RunLoopOptions::skipped_digest against the steps skipped, `skipped` of them.
 void checkSkipped(const RunLoopOptions& options, std::size_t skipped) {
   if (!options.skipped_digest || !options.digest) return;
@@ -125,7 +122,7 @@ std::size_t runLoop(SlamFilter& filter, const Dataset& data, const std::vector<R
   for (RunObserver* o : observers) o->onStart(filter, start_time);
   std::size_t k = first;
   for (; k < data.steps.size(); ++k) {
-    if (stopRequested(options)) {
+    if (stopRequested(options.stop)) {
       stopRun(filter, observers, k);
       break;
     }
@@ -160,7 +157,7 @@ std::size_t runLoop(SlamFilter& filter, EventSource& source, StepAssembler& step
   std::size_t k = 0, run = 0;
   double last_time = 0.0;  // time of the last skipped step
   while (steps.next(source, step, &groundtruth, &gps)) {
-    if (k >= options.start_step && stopRequested(options)) {
+    if (k >= options.start_step && stopRequested(options.stop)) {
       // What the stream carried with the step not run (ground truth, GPS) is not handed on.
       if (run == 0) {
         checkSkipped(options, k);
