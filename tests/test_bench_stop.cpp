@@ -31,6 +31,7 @@ TEST(BenchStop, AStoppedStudyKeepsTheCasesItFinished) {
   EXPECT_EQ(report.rows[0].landmarks, 100);
   EXPECT_TRUE(report.rows[0].measurement.has_value()) << report.rows[0].skipped;
   EXPECT_TRUE(nlohmann::json::parse(seif::benchJson(report))["interrupted"].get<bool>());
+  EXPECT_EQ(seif::interruptedText(report), "bench interrupted after 1 case");
   // Not stopped: every case, and not interrupted.
   seif::BenchRequest whole = smallBench();
   whole.filters = {"ekf"};

@@ -238,6 +238,7 @@ TEST(Consistency, AStoppedStudySummarisesTheRunsItFinished) {
             std::string::npos)
       << seif::consistencyTable(r);
   EXPECT_EQ(seif::consistencyTable(whole).find("Interrupted"), std::string::npos);
+  EXPECT_EQ(seif::interruptedText(r), "consistency interrupted: 2 of 4 runs finished");
   const auto j = nlohmann::json::parse(seif::consistencyJson(r, o));
   EXPECT_EQ(j["runs"], 2);
   EXPECT_EQ(j["runs_requested"], 4);

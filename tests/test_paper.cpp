@@ -247,6 +247,7 @@ TEST(PaperStudy, AStoppedStudyKeepsTheRunsThatRan) {
   }
   EXPECT_NE(seif::paperSummaryText(stopped).find("Interrupted: 2 of 20 runs ran"), std::string::npos);
   EXPECT_EQ(seif::paperSummaryText(two).find("Interrupted"), std::string::npos);
+  EXPECT_EQ(seif::interruptedText(stopped), "paper interrupted: 2 of 20 runs ran");
   const auto dir = seif::test::scratchDir("paper-interrupted");
   seif::writePaperResults(stopped, dir);
   const nlohmann::json j = nlohmann::json::parse(seif::test::slurp(dir / "results.json"));

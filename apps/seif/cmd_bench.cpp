@@ -74,8 +74,7 @@ void bench(const BenchArgs& args) {
   }
   if (report.interrupted) {
     std::fflush(stdout);
-    throw Interrupted("bench interrupted after " + std::to_string(report.rows.size()) +
-                      " cases: the rows above are in " + json.string());
+    throw Interrupted(interruptedText(report) + ": the rows above are in " + json.string());
   }
 }
 

@@ -89,8 +89,7 @@ void consistencyCommand(const ConsistencyArgs& args) {
   }
   if (result.interrupted) {
     std::fflush(stdout);
-    throw Interrupted("consistency interrupted: " + std::to_string(result.runs) + " of " +
-                      std::to_string(result.runs_requested) + " runs finished; their results are in " + args.out +
+    throw Interrupted(interruptedText(result) + "; their results are in " + args.out +
                       (stopped.empty() ? "" : " (" + stopped + ")"));
   }
   if (!stopped.empty()) {

@@ -73,8 +73,7 @@ void paperCommand(const PaperArgs& args) {
   }
   if (report.interrupted) {
     std::fflush(stdout);
-    throw Interrupted("paper interrupted: " + std::to_string(report.runs.size() + report.failed.size()) + " of " +
-                      std::to_string(args.runs) + " runs ran; their results are in " + args.out);
+    throw Interrupted(interruptedText(report) + "; their results are in " + args.out);
   }
 }
 

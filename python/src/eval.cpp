@@ -516,8 +516,7 @@ void bindPaper(py::module_& m) {
         }
         if (none_ran) raiseInterrupted(*none_ran, py::none());
         if (report->interrupted) {
-          const std::string what = "paper interrupted: " + std::to_string(report->runs.size() + report->failed.size()) +
-                                   " of " + std::to_string(request.runs) + " runs ran (their report: .result)";
+          const std::string what = interruptedText(*report) + " (their report: .result)";
           raiseInterrupted(what, py::cast(std::move(report)));
         }
         return report;
@@ -615,9 +614,7 @@ void bindConsistency(py::module_& m) {
         }
         if (none_finished) raiseInterrupted(*none_finished, py::none());
         if (result.interrupted) {
-          raiseInterrupted("consistency interrupted: " + std::to_string(result.runs) + " of " +
-                               std::to_string(result.runs_requested) + " runs finished (their result: .result)",
-                           py::cast(result));
+          raiseInterrupted(interruptedText(result) + " (their result: .result)", py::cast(result));
         }
         return result;
       },
@@ -778,9 +775,7 @@ void bindBench(py::module_& m) {
           report = runBench(request, callback);
         }
         if (report.interrupted) {
-          raiseInterrupted("bench interrupted after " + std::to_string(report.rows.size()) +
-                               " cases (the report: .result)",
-                           py::cast(report));
+          raiseInterrupted(interruptedText(report) + " (the report: .result)", py::cast(report));
         }
         return report;
       },

@@ -171,7 +171,7 @@ def test_ctrl_c_stops_a_bench_study_before_its_next_case():
         rows.append(row)
         os.kill(os.getpid(), signal.SIGINT)
 
-    with pytest.raises(KeyboardInterrupt, match="after 1 cases") as stopped:
+    with pytest.raises(KeyboardInterrupt, match="after 1 case ") as stopped:
         seif.run_bench(request, ctrl_c_after_the_first)
     report = stopped.value.result
     assert report.interrupted and [r.landmarks for r in report.rows] == [100] == [r.landmarks for r in rows]

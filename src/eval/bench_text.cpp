@@ -67,6 +67,11 @@ std::string benchTargetsText(const BenchTargets& t) {
   return text;
 }
 
+std::string interruptedText(const BenchReport& report) {
+  const std::size_t n = report.rows.size();
+  return "bench interrupted after " + std::to_string(n) + (n == 1 ? " case" : " cases");
+}
+
 std::string benchSummaryText(const BenchReport& report) {
   std::string text = benchHeaderText();
   for (const BenchRow& row : report.rows) text += benchRowText(row);

@@ -499,6 +499,11 @@ std::string consistencyJson(const ConsistencyResult& result, const ConsistencyOp
   return j.dump(2);
 }
 
+std::string interruptedText(const ConsistencyResult& result) {
+  return "consistency interrupted: " + std::to_string(result.runs) + " of " + std::to_string(result.runs_requested) +
+         " runs finished";
+}
+
 std::string consistencyCsv(const ConsistencyResult& r) {
   std::ostringstream csv;
   csv.precision(10);

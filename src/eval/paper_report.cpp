@@ -350,6 +350,11 @@ std::string interruptedNote(const PaperReport& report) {
 
 }  // namespace
 
+std::string interruptedText(const PaperReport& report) {
+  return "paper interrupted: " + std::to_string(report.runs.size() + report.failed.size()) + " of " +
+         std::to_string(report.request.runs) + " runs ran";
+}
+
 std::string paperSummaryText(const PaperReport& report) {
   PaperTables t;
   fillTables(report, t);

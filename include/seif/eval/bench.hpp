@@ -214,6 +214,10 @@ std::string benchRowText(const BenchRow& row);
 std::string benchTargetsText(const BenchTargets& targets);
 std::string benchSummaryText(const BenchReport& report);
 
+/// One line for a stopped study (BenchReport::interrupted): "bench interrupted after 3
+/// cases". `seif bench` and seif.run_bench say after it where the rows are.
+std::string interruptedText(const BenchReport& report);
+
 /// Runs the study; `row_done(row)` follows every case, measured or skipped. Throws
 /// NumericError when a calibration case fails.
 BenchReport runBench(const BenchRequest& request, const std::function<void(const BenchRow&)>& row_done = {});

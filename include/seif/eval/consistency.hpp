@@ -128,6 +128,11 @@ void checkConsistencyOptions(const ConsistencyOptions& options);
 ConsistencyResult runConsistency(const ConsistencyOptions& options,
                                  const std::function<void(std::size_t, std::size_t)>& progress = {});
 
+/// One line for a stopped study (ConsistencyResult::interrupted): "consistency
+/// interrupted: 12 of 50 runs finished". `seif consistency` and seif.run_consistency say
+/// after it where the results are.
+std::string interruptedText(const ConsistencyResult& result);
+
 /// The NEES of `filter` now against the true pose and landmark positions (by id), with its
 /// marginal covariances and its own estimate, or `mean` (the whole state in the state
 /// order, e.g. SlamFilter::posteriorMean) when given.

@@ -174,6 +174,10 @@ void checkPaperRequest(const PaperRequest& request);
 PaperReport runPaper(const PaperRequest& request,
                      const std::function<void(std::size_t, std::size_t)>& progress = {});
 
+/// One line for a stopped study (PaperReport::interrupted): "paper interrupted: 12 of 50
+/// runs ran". `seif paper` and seif.run_paper say after it where the results are.
+std::string interruptedText(const PaperReport& report);
+
 /// What `seif paper` prints: the table beside the paper's numbers, its notes, and the
 /// sweep's and the beyond-the-paper tables when they ran.
 std::string paperSummaryText(const PaperReport& report);
