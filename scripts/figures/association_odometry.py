@@ -19,13 +19,11 @@ Run:  PYTHONPATH=build/python /usr/bin/python3 scripts/figures/association_odome
 """
 import argparse
 import concurrent.futures
-import json
 import os
-import subprocess
 
 import seif
+from association_study import metrics, run as run_cli  # the sibling study's CLI helpers
 
-SEIF = os.environ.get("SEIF", "build/bin/seif")
 METHODS = ["known", "nn", "jcbb"]
 
 
@@ -42,10 +40,8 @@ def simulate(folder, scale, seed):
 def run(world, method):
     out = os.path.join(world, method)
     extra = ["--drop-unlabelled"] if method == "known" else []
-    subprocess.run([SEIF, "run", "--dataset", world, "--filter", "ekf", "--association", method, *extra,
-                    "--out", out], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    with open(os.path.join(out, "metrics.json")) as f:
-        return json.load(f)
+    run_cli(["run", "--dataset", world, "--filter", "ekf", "--association", method, *extra, "--out", out])
+    return metrics(out)
 
 
 def main():
@@ -57,7 +53,7 @@ def main():
     a = p.parse_args()
     scales = [float(s) for s in a.scales.split(",")]
     seeds = range(1, a.seeds + 1)
-    noise = {}
+    noise = {}  # the scaled noise, the same for every seed
     for scale in scales:
         for seed in seeds:
             noise[scale] = simulate(os.path.join(a.out, f"x{scale}-seed{seed}"), scale, seed)
