@@ -271,6 +271,8 @@ TEST(VictoriaPark, MalformedRawLinesNameFileAndLine) {
   refused("1.0 -1 5 1 0.2\n", "vp/tree_detections.txt:1", "bad id");
   refused("1.0 0 0 1 0.2\n", "vp/tree_detections.txt:1", "range");
   refused("2.0 0 5 1 0.2\n1.0 1 5 1 0.2\n", "vp/tree_detections.txt:2", "goes backwards");
+  refused("1.0 3 5 1 0.2\n1.0 4 6 1 0.2\n", "vp/tree_detections.txt:2", "scan index 4 differs from the 3");
+  refused("1.0 3 5 1 0.2\n1.1 3 6 1 0.2\n", "vp/tree_detections.txt:2", "scan index 3 does not follow");
   // The UTS file, read for truth, keeps its checks.
   VictoriaParkFiles f = rawFolder();
   f.text["tree_observations_associated_UTS.txt"] = "1.025 5.0 0.5 9 0 0\n1.025 -5.0 0.5 9 0 0\n";

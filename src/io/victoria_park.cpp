@@ -129,7 +129,7 @@ class VictoriaParkSource final : public EventSource {
       while (observations_.time == t) {
         const TextTable& r = *observations_.table;
         if (raw_) {
-          r.index(1);  // scan index: checked, not used
+          checkScanIndex(r, r.index(1), obs.observations.empty());
           const double range = r.range(2), angle = laserAngle(r, 3);
           const double diameter = r.real(4);  // checked, not used
           if (diameter < 0.0) r.fail("diameter " + formatDouble(diameter) + " must not be negative");
@@ -221,6 +221,18 @@ class VictoriaParkSource final : public EventSource {
   std::vector<AssociatedRow> window_;
   double window_time_ = -kNever;
   std::size_t unmatched_truth_ = 0;
+  long long scan_ = -1;  // the raw file's scan index of the stamp read last
+
+  /// The scan index is not used, but it tells a corrupt file: one stamp is one scan, so the
+  /// rows of a stamp share it and a later stamp has a larger one.
+  void checkScanIndex(const TextTable& r, long long scan, bool first_of_stamp) {
+    if (first_of_stamp) {
+      if (scan <= scan_) r.fail("scan index " + std::to_string(scan) + " does not follow the scan before it (" + std::to_string(scan_) + ")");
+      scan_ = scan;
+    } else if (scan != scan_) {
+      r.fail("scan index " + std::to_string(scan) + " differs from the " + std::to_string(scan_) + " of the rows before it at the same time");
+    }
+  }
   std::size_t controls_size_ = 0;  // rows (memory) or bytes (file) of controls.txt, for progress()
   std::size_t controls_read_ = 0;
 };

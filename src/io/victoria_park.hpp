@@ -4,7 +4,7 @@
 //   tree_observations_associated_UTS.txt  time range angle_laser feature_id x_est y_est
 //                                         (known association, Huang et al.; x_est, y_est unused)
 //   tree_detections.txt                   time scan_index range angle_laser diameter
-//                                         (the raw detector output, no association; diameter unused)
+//                                         (the raw detector output, no association; scan_index, diameter unused)
 //   gps.txt                               time x y               (optional; failing unit: gaps, jumps)
 // DatasetOptions::detections picks the detections: Associated (default) reads the UTS file,
 // Raw reads tree_detections.txt (then the UTS file is optional). Every file is streamed line
@@ -22,7 +22,8 @@
 // Checks besides the table rules: time going backwards within a file, range <= 0, an angle
 // outside [0, pi] (the laser's field of view) by more than its printed precision (half a unit
 // of its last decimal: 3.141593 is pi, clamped into [0, pi]), a negative feature id, scan
-// index or diameter.
+// index or diameter, and a scan index that is not one per stamp, increasing (scan_index and
+// diameter are otherwise unused).
 //
 // Models: AckermannModel with victoriaParkGeometry(): as in Guivant and Nebot's published
 // model, the state is the pose of the laser (a, b from the rear axle), so the range-bearing
