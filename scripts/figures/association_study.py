@@ -36,6 +36,14 @@ def run(args):
     subprocess.run([SEIF, *args], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
 
 
+def run_all(arglists, workers):
+    """run() of each argument list, `workers` at a time, with a count of the runs done."""
+    with concurrent.futures.ThreadPoolExecutor(workers) as pool:
+        for done, _ in enumerate(pool.map(run, arglists), 1):
+            print(f"\r{done}/{len(arglists)} runs", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+
+
 def metrics(folder):
     with open(os.path.join(folder, "metrics.json")) as f:
         return json.load(f)
@@ -54,11 +62,10 @@ def main():
     worlds = a.worlds.split(",")
     filters = seif.split_filter_list(a.filters)  # as the CLI's --filters
     seeds = range(1, a.seeds + 1)
-    pool = concurrent.futures.ThreadPoolExecutor(a.jobs)
 
     data = {(w, s): os.path.join(a.out, f"{w}-{s}") for w in worlds for s in seeds}
-    list(pool.map(run, [["simulate", *WORLDS[w], "--seed", str(s), "--clutter", "1", "--detection-probability", "0.9",
-                         "--out", d] for (w, s), d in data.items()]))
+    run_all([["simulate", *WORLDS[w], "--seed", str(s), "--clutter", "1", "--detection-probability", "0.9",
+              "--out", d] for (w, s), d in data.items()], a.jobs)
 
     cases = [("known", "filter")] + [(m, pl) for m in ("nn", "jcbb") for pl in a.provisional.split(",")]
     jobs = {}
@@ -70,11 +77,7 @@ def main():
                 flags = ["--drop-unlabelled"] if m == "known" else ["--gate-marginal", gate, "--provisional", pl]
                 jobs[(w, s, f, m, pl)] = (out, ["run", "--dataset", d, "--filter", f, "--association", m, *flags,
                                                 "--out", out])
-    done = 0
-    for _ in pool.map(run, [j[1] for j in jobs.values()]):
-        done += 1
-        print(f"\r{done}/{len(jobs)} runs", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
+    run_all([j[1] for j in jobs.values()], a.jobs)
 
     print("| world | filter | gate | association | provisional | correct (worst seed) | of all labelled "
           "| landmarks (spurious, duplicates) | map RMSE [m] | known | ratio | s associating |")
