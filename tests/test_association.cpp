@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -697,6 +698,86 @@ void expectGoodAssociationOnThePark(const std::string& filter, std::uint64_t see
 }
 
 }  // namespace
+
+// lastScan(): one decision per observation given, each consistent with the gates, the
+// observations left for the update, and the counts; every outcome met on the way.
+TEST(Association, TheLastScanSaysWhatBecameOfEveryObservation) {
+  const double accept_d2 = chiSquareQuantile(0.99, 2), new_d2 = chiSquareQuantile(0.9999, 2);
+  for (AssociationMethod method : {AssociationMethod::NearestNeighbour, AssociationMethod::Jcbb}) {
+    for (ProvisionalPlace place : {ProvisionalPlace::Filter, ProvisionalPlace::Held}) {
+      const std::string label = std::string(associationMethodName(method)) + ", " + std::string(provisionalPlaceName(place));
+      WorldConfig world = presetConfig(WorldPreset::Park, 0, 400, 3);
+      world.clutter = 1.0;
+      world.detection_probability = 0.9;
+      const Dataset data = buildDataset(simulate(world));
+      auto f = makeFilter("ekf", startPose(data), paperFilterConfig(data.noise.value_or(world.noise)));
+      AssociationOptions o;
+      o.method = method;
+      o.provisional = place;
+      Associator a(o);
+      std::map<ScanDecision::Outcome, std::size_t> seen;
+      std::size_t held_sightings = 0;
+      RunLoopOptions loop;
+      loop.associate = [&](SlamFilter& filter, const Step&, std::size_t k, std::vector<Observation>& z) {
+        const std::size_t given = z.size();
+        const AssociationCounts before = a.counts();
+        a.associate(filter, k, z);
+        const std::span<const ScanDecision> d = a.lastScan();
+        ASSERT_EQ(d.size(), given) << label << ", step " << k;
+        std::size_t applied = 0, started = 0, dropped = 0;
+        std::set<int> paired;
+        for (const ScanDecision& x : d) {
+          switch (x.outcome) {
+            case ScanDecision::Outcome::Matched:
+              EXPECT_LE(x.d2, accept_d2) << label << ", step " << k;
+              EXPECT_TRUE(paired.insert(x.landmark).second) << "two observations of landmark " << x.landmark;
+              break;
+            case ScanDecision::Outcome::New:
+              EXPECT_GT(x.d2, new_d2) << label << ", step " << k;
+              EXPECT_FALSE(filter.hasLandmark(x.landmark)) << label << ": started as " << x.landmark << ", an id in use";
+              ++started;
+              break;
+            case ScanDecision::Outcome::Ambiguous:
+              EXPECT_LE(x.d2, new_d2) << label << ", step " << k;
+              EXPECT_EQ(x.landmark, kUnknownLandmark);
+              EXPECT_FALSE(x.applied);
+              ++dropped;
+              break;
+          }
+          ++seen[x.outcome];
+          if (x.outcome != ScanDecision::Outcome::Ambiguous) {
+            EXPECT_NE(x.landmark, kUnknownLandmark);
+          }
+          if (x.outcome == ScanDecision::Outcome::Matched && !x.applied) ++held_sightings;
+          if (x.applied) {  // the observations left for the update, in the same order
+            ASSERT_LT(applied, z.size()) << label << ", step " << k;
+            EXPECT_EQ(z[applied].landmark, x.landmark) << label << ", step " << k;
+            ++applied;
+          }
+        }
+        EXPECT_EQ(applied, z.size()) << label << ", step " << k;
+        EXPECT_EQ(started, a.counts().new_landmarks - before.new_landmarks) << label << ", step " << k;
+        EXPECT_EQ(dropped, a.counts().ambiguous_dropped - before.ambiguous_dropped) << label << ", step " << k;
+      };
+      runLoop(*f, data, {}, loop);
+      for (ScanDecision::Outcome outcome : {ScanDecision::Outcome::Matched, ScanDecision::Outcome::New,
+                                            ScanDecision::Outcome::Ambiguous}) {
+        EXPECT_GT(seen[outcome], 0u) << label << ": no observation " << scanOutcomeName(outcome);
+      }
+      // Held: a provisional landmark's sightings before it is confirmed stay out of the filter.
+      EXPECT_EQ(held_sightings > 0, place == ProvisionalPlace::Held) << label;
+    }
+  }
+  // Known association decides nothing.
+  const test::Scenario s = test::makeScenario(5, 12, 3);
+  auto f = makeFilter("ekf", s.start, test::configFor(s));
+  Associator known{AssociationOptions{}};
+  std::vector<Observation> z = s.steps[0].observations;
+  ASSERT_FALSE(z.empty());
+  f->predict(s.steps[0].u);
+  known.associate(*f, 0, z);
+  EXPECT_TRUE(known.lastScan().empty());
+}
 
 TEST(Association, NearestNeighbourAndJcbbOnTheParkWithClutter) {
   expectGoodAssociationOnThePark("ekf", 1, 0.4);

@@ -515,6 +515,20 @@ void bindAssociation(py::module_& m) {
         return reprOf(s, {"observations", "scored", "correct", "wrong", "new_landmarks", "landmarks_final",
                           "spurious_landmarks", "duplicate_landmarks"});
       });
+  py::class_<ScanDecision> decision(m, "ScanDecision", "What Associator.associate decided for one observation (last_scan)");
+  py::enum_<ScanDecision::Outcome>(decision, "Outcome", "Matched, New (a landmark started) or Ambiguous (dropped)")
+      .value("Matched", ScanDecision::Outcome::Matched)
+      .value("New", ScanDecision::Outcome::New)
+      .value("Ambiguous", ScanDecision::Outcome::Ambiguous);
+  decision.def_readonly("outcome", &ScanDecision::outcome)
+      .def_readonly("landmark", &ScanDecision::landmark, "Matched, New: the landmark id; Ambiguous: -1")
+      .def_readonly("provisional", &ScanDecision::provisional, "the landmark is still provisional after this sighting")
+      .def_readonly("applied", &ScanDecision::applied,
+                    "the observation goes to the update (not when dropped, nor a held landmark's sighting)")
+      .def_readonly("d2", &ScanDecision::d2,
+                    "Matched: the pairing's squared Mahalanobis distance; else to the nearest landmark (inf: none)")
+      .def("__repr__",
+           [](py::handle d) { return reprOf(d, {"outcome", "landmark", "provisional", "applied", "d2"}); });
   py::class_<Associator>(m, "Associator",
                          "Gives observations their landmark ids before an update (run_loop's associate hook)")
       .def(py::init<const AssociationOptions&>(), py::arg("options"))
@@ -534,6 +548,11 @@ void bindAssociation(py::module_& m) {
            "association")
       .def("truth_of", &Associator::truthOf, py::arg("id"))
       .def_property_readonly("counts", &Associator::counts, py::return_value_policy::copy)
+      .def_property_readonly(
+          "last_scan",
+          [](const Associator& a) { return std::vector<ScanDecision>(a.lastScan().begin(), a.lastScan().end()); },
+          "What the last associate() decided, one ScanDecision per observation it was given, in their order "
+          "(empty with known association and after a step without observations)")
       .def_property_readonly("options", &Associator::options, py::return_value_policy::copy)
       .def(
           "state_bytes", [](const Associator& a) { return py::bytes(a.saveState()); },

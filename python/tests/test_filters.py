@@ -285,6 +285,34 @@ def test_a_discarded_scan_counts_nothing():
     assert sorted(f.landmark_ids()) == sorted(first)
 
 
+def test_last_scan_says_what_became_of_each_observation():
+    """Associator.last_scan: one decision per observation given, in their order; the matched
+    and new ones are those returned, the ambiguous one is dropped."""
+    options = seif.AssociationOptions()
+    options.method = seif.AssociationMethod.NearestNeighbour
+    options.confirm = 1  # every new landmark confirmed at once
+    associator = seif.Associator(options)
+    f = seif.make_filter("ekf", np.zeros(3), seif.paper_filter_config(seif.NoiseModel()))
+    first = [seif.Observation(-1, np.array([0.1, 0.5]))]
+    f.update(associator.associate(f, 0, first))
+    (started,) = associator.last_scan
+    assert started.outcome == seif.ScanDecision.Outcome.New
+    assert started.applied and not started.provisional and started.d2 == float("inf")
+    # The same point seen twice: one observation per landmark a scan, so the second, inside
+    # the landmark's gates, is left without one.
+    scan = [seif.Observation(-1, np.array([0.1, 0.5])), seif.Observation(-1, np.array([0.1, 0.5]))]
+    kept = associator.associate(f, 1, scan)
+    matched, second = associator.last_scan
+    assert matched.outcome == seif.ScanDecision.Outcome.Matched and matched.landmark == started.landmark
+    assert matched.d2 < seif.chi_square_quantile(0.99, 2)
+    assert second.outcome == seif.ScanDecision.Outcome.Ambiguous and second.landmark == -1
+    assert not second.applied and second.d2 <= seif.chi_square_quantile(0.9999, 2)
+    assert [z.landmark for z in kept] == [matched.landmark]
+    assert associator.counts.ambiguous_dropped == 1
+    associator.associate(f, 2, [])
+    assert associator.last_scan == []
+
+
 def test_each_filter_names_the_marginal_its_gates_default_to():
     """AssociationOptions.marginal = None gates with the filter's own marginal: the SEIF's local
     one (constant time), the exact one elsewhere; the batch before it solves uses its start's."""

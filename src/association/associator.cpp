@@ -130,6 +130,7 @@ struct Associator::Impl {
   std::unordered_map<int, int> label;  // set by finish()
   std::unordered_map<int, Provisional> provisional;
   std::vector<int> touched;  // landmarks to re-index at the next scan
+  std::vector<ScanDecision> last_scan;  // Associator::lastScan()
   std::vector<int> started;  // landmarks the last scan started in the filter
   std::size_t refresh_cursor = 0;
   std::size_t scans = 0;  // steps with observations so far
@@ -430,6 +431,16 @@ Associator& Associator::operator=(Associator&&) noexcept = default;
 void Associator::discardScan() { impl_->discardScan(); }
 
 const AssociationCounts& Associator::counts() const { return impl_->counts; }
+std::span<const ScanDecision> Associator::lastScan() const { return impl_->last_scan; }
+
+std::string_view scanOutcomeName(ScanDecision::Outcome o) {
+  switch (o) {
+    case ScanDecision::Outcome::Matched: return "matched";
+    case ScanDecision::Outcome::New: return "new";
+    case ScanDecision::Outcome::Ambiguous: return "ambiguous";
+  }
+  return "?";
+}
 const AssociationOptions& Associator::options() const { return impl_->options; }
 int Associator::truthOf(int id) const {
   const auto it = impl_->label.find(id);
@@ -439,6 +450,7 @@ int Associator::truthOf(int id) const {
 void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Observation>& observations) {
   Impl& s = *impl_;
   const auto start = std::chrono::steady_clock::now();
+  s.last_scan.clear();
   if (s.options.method == AssociationMethod::Known) {
     s.counts.observations += observations.size();
     if (s.options.drop_unlabelled) {
@@ -596,11 +608,18 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   const std::optional<double> log_clutter = s.scored() ? s.scanClutter(sensor, observations, pairing) : std::nullopt;
   std::vector<Observation> kept;
   kept.reserve(observations.size());
+  s.last_scan.assign(observations.size(), ScanDecision{});
   for (std::size_t i = 0; i < observations.size(); ++i) {
     Observation z = observations[i];
     bool apply = true;  // false: the sighting of a held landmark, kept out of the filter
+    ScanDecision& decision = s.last_scan[i];
+    decision.d2 = nearest[i];
     if (pairing[i] >= 0) {
       z.landmark = pairing[i];
+      decision.outcome = ScanDecision::Outcome::Matched;
+      for (const Pairing& p : scan.compatible[i]) {
+        if (p.landmark == z.landmark) decision.d2 = p.d2;
+      }
       if (const auto p = s.provisional.find(z.landmark); p != s.provisional.end()) {
         s.recordProvisional(z.landmark);
         Provisional& track = p->second;
@@ -624,9 +643,14 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
             z.noise = 0.5 * (R + R.transpose());
           }
         }
-        if (confirming) s.provisional.erase(p);
+        if (confirming) {
+          s.provisional.erase(p);
+        } else {
+          decision.provisional = true;
+        }
       }
     } else if (nearest[i] > s.new_d2) {
+      decision.outcome = ScanDecision::Outcome::New;
       while (filter.hasLandmark(s.next_id)) ++s.next_id;  // ids the filter held before (a caller's map)
       z.landmark = s.next_id++;
       record.fresh.push_back(z.landmark);
@@ -636,6 +660,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
         const bool hold = s.options.provisional == ProvisionalPlace::Held;
         s.provisional[z.landmark] = Provisional{s.scans, 1, 0.0, hold, point[i], spread[i], lever[i]};
         apply = !hold;
+        decision.provisional = true;
       }
       if (apply) s.started.push_back(z.landmark);
       s.grid.setSpread(z.landmark, sigma[i]);  // its covariance is the point's
@@ -643,6 +668,8 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
       ++s.counts.ambiguous_dropped;
       continue;
     }
+    decision.landmark = z.landmark;
+    decision.applied = apply;
     const int truth = z.truth < 0 ? kUnknownLandmark : z.truth;
     ++s.seen_truths[z.landmark][truth];
     record.tallies.emplace_back(z.landmark, truth);

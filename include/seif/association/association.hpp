@@ -186,6 +186,27 @@ struct AssociationCounts {
   double seconds = 0.0;               ///< wall time spent associating
 };
 
+/// What associate() decided for one observation of its scan (Associator::lastScan()).
+struct ScanDecision {
+  enum class Outcome {
+    Matched,    ///< paired with a mapped or provisional landmark inside the accept gate
+    New,        ///< beyond the new-landmark gate of every landmark: a new landmark started
+    Ambiguous,  ///< neither: dropped
+  };
+  Outcome outcome = Outcome::Ambiguous;
+  int landmark = kUnknownLandmark;  ///< Matched, New: the landmark; Ambiguous: kUnknownLandmark
+  /// The landmark is still provisional after this sighting (not confirmed yet).
+  bool provisional = false;
+  /// The observation is among those associate() left for the filter's update: not when
+  /// dropped, nor when it is a sighting of a held provisional landmark (ProvisionalPlace::Held).
+  bool applied = false;
+  /// Matched: the pairing's squared Mahalanobis distance. New, Ambiguous: that to the nearest
+  /// landmark in reach (infinity when none was).
+  double d2 = 0.0;
+};
+
+std::string_view scanOutcomeName(ScanDecision::Outcome o);  ///< "matched" | "new" | "ambiguous"
+
 /// The correspondence test (IJRR 2004 §4; Probabilistic Robotics §12.7): the squared
 /// Mahalanobis distance of Delta = y_a - y_b, Sigma_Delta = F_Delta Sigma F_Delta^T over the
 /// joint marginal of landmarks a and b (SlamFilter::marginal with `mode`). Small: they may be
@@ -221,6 +242,11 @@ class Associator {
   void finish(SlamFilter& filter, const std::atomic<bool>* stop = nullptr);
 
   const AssociationCounts& counts() const;
+  /// What the last associate() decided, one entry per observation it was given, in their
+  /// order: what became of the ones it dropped, and how far each was from its landmark.
+  /// Empty with known association, after a step without observations, and in an associator
+  /// just restored (it is not part of saveState()).
+  std::span<const ScanDecision> lastScan() const;
   /// Landmark `id`'s label: the truth id most of its observations carried (kUnknownLandmark
   /// when none had one): to score a map against ground truth.
   int truthOf(int id) const;
