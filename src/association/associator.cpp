@@ -130,7 +130,7 @@ struct Associator::Impl {
   std::unordered_map<int, int> label;  // set by finish()
   std::unordered_map<int, Provisional> provisional;
   std::vector<int> touched;  // landmarks to re-index at the next scan
-  std::vector<ScanDecision> last_scan;  // Associator::lastScan()
+  std::vector<ScanDecision> decisions;  // Associator::lastScan()
   std::vector<int> started;  // landmarks the last scan started in the filter
   std::size_t refresh_cursor = 0;
   std::size_t scans = 0;  // steps with observations so far
@@ -431,7 +431,7 @@ Associator& Associator::operator=(Associator&&) noexcept = default;
 void Associator::discardScan() { impl_->discardScan(); }
 
 const AssociationCounts& Associator::counts() const { return impl_->counts; }
-std::span<const ScanDecision> Associator::lastScan() const { return impl_->last_scan; }
+std::span<const ScanDecision> Associator::lastScan() const { return impl_->decisions; }
 
 std::string_view scanOutcomeName(ScanDecision::Outcome o) {
   switch (o) {
@@ -450,7 +450,7 @@ int Associator::truthOf(int id) const {
 void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Observation>& observations) {
   Impl& s = *impl_;
   const auto start = std::chrono::steady_clock::now();
-  s.last_scan.clear();
+  s.decisions.clear();
   if (s.options.method == AssociationMethod::Known) {
     s.counts.observations += observations.size();
     if (s.options.drop_unlabelled) {
@@ -608,11 +608,11 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   const std::optional<double> log_clutter = s.scored() ? s.scanClutter(sensor, observations, pairing) : std::nullopt;
   std::vector<Observation> kept;
   kept.reserve(observations.size());
-  s.last_scan.assign(observations.size(), ScanDecision{});
+  s.decisions.assign(observations.size(), ScanDecision{});
   for (std::size_t i = 0; i < observations.size(); ++i) {
     Observation z = observations[i];
     bool apply = true;  // false: the sighting of a held landmark, kept out of the filter
-    ScanDecision& decision = s.last_scan[i];
+    ScanDecision& decision = s.decisions[i];
     decision.d2 = nearest[i];
     if (pairing[i] >= 0) {
       z.landmark = pairing[i];
