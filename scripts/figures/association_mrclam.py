@@ -115,7 +115,6 @@ def main():
                       f"| {s['landmarks_final']} ({s['duplicate_landmarks']}) | {x['ate_rmse']:.3f} "
                       f"| {known['ate_rmse']:.3f} | {x['dead_reckoning_ate_rmse']:.3f} |")
 
-
     print()
     print("| filter | association | robot | wrong | in a landmark of its cluster | of another cluster | in a second copy of its own |")
     print("|---|---|---:|---:|---:|---:|---:|")
