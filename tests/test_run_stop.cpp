@@ -135,6 +135,10 @@ TEST(RunStop, AnAssociatingRunStoppedAndResumedEqualsTheWholeRun) {
     const seif::RunReport rest = seif::runDataset(resume, resumed);
     EXPECT_EQ(rest.association_options.method, method);
     expectSameOutputs(resumed, whole);
+    // Every observation's association too, those before the stop from the checkpoint.
+    ASSERT_TRUE(fs::exists(whole / "associations.csv"));
+    EXPECT_EQ(slurp(resumed / "associations.csv"), slurp(whole / "associations.csv"));
+    EXPECT_EQ(rest.output.associations.size(), rest.association->observations);
     EXPECT_GT(estimateMetrics(whole).at("association").at("correct").get<std::size_t>(), 0u);
   }
 }

@@ -131,6 +131,7 @@ struct Associator::Impl {
   std::unordered_map<int, Provisional> provisional;
   std::vector<int> touched;  // landmarks to re-index at the next scan
   std::vector<ScanDecision> decisions;  // Associator::lastScan()
+  std::vector<LandmarkMerge> merges;    // Associator::lastMerges()
   std::vector<int> started;  // landmarks the last scan started in the filter
   std::size_t refresh_cursor = 0;
   std::size_t scans = 0;  // steps with observations so far
@@ -292,6 +293,7 @@ struct Associator::Impl {
       if (d2 > merge_d2) continue;
       const int keep = std::min(id, other), drop = std::max(id, other);  // the older stays
       filter.mergeLandmarks(keep, drop);
+      merges.push_back({keep, drop});
       for (const auto& [truth, n] : seen_truths[drop]) seen_truths[keep][truth] += n;
       seen_truths.erase(drop);
       const auto pd = provisional.find(drop);
@@ -432,6 +434,7 @@ void Associator::discardScan() { impl_->discardScan(); }
 
 const AssociationCounts& Associator::counts() const { return impl_->counts; }
 std::span<const ScanDecision> Associator::lastScan() const { return impl_->decisions; }
+std::span<const LandmarkMerge> Associator::lastMerges() const { return impl_->merges; }
 
 std::string_view scanOutcomeName(ScanDecision::Outcome o) {
   switch (o) {
@@ -451,6 +454,7 @@ void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Ob
   Impl& s = *impl_;
   const auto start = std::chrono::steady_clock::now();
   s.decisions.clear();
+  s.merges.clear();
   if (s.options.method == AssociationMethod::Known) {
     s.counts.observations += observations.size();
     if (s.options.drop_unlabelled) {

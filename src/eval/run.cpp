@@ -134,6 +134,10 @@ void keepCompleteSteps(RunOutput& out, bool pose_covariances) {
   out.dead_reckoning.resize(std::min(out.dead_reckoning.size(), out.steps + 1));
   if (pose_covariances) out.pose_covariances.resize(std::min(out.pose_covariances.size(), out.steps + 1));
   out.step_seconds.resize(std::min(out.step_seconds.size(), out.steps));
+  // The failed step's observations went to no update; its merges stay (they are in the filter).
+  const auto first_failed = std::find_if(out.associations.begin(), out.associations.end(),
+                                         [&](const AssociationRecord& r) { return r.step >= out.steps; });
+  out.associations.erase(first_failed, out.associations.end());
   out.seconds = 0.0;
   for (double t : out.step_seconds) out.seconds += t;
 }
@@ -187,8 +191,25 @@ RunOutput runFilter(SlamFilter& filter, EventSource& source, const std::function
     options.skipped_digest = resume->steps_digest;
   }
   if (associator) {
-    options.associate = [associator](SlamFilter& f, const Step&, std::size_t k, std::vector<Observation>& z) {
+    const bool record = associator->options().method != AssociationMethod::Known;
+    options.associate = [associator, record, &out](SlamFilter& f, const Step&, std::size_t k, std::vector<Observation>& z) {
+      if (!record) {
+        associator->associate(f, k, z);
+        return;
+      }
+      // Each observation as offered (the associator hides its id, kept as the truth), then
+      // what became of it.
+      const std::size_t first = out.associations.size();
+      for (std::size_t i = 0; i < z.size(); ++i) {
+        const int truth = z[i].truth != kUnknownLandmark ? z[i].truth : z[i].landmark;
+        out.associations.push_back({k, i, z[i].z, truth < 0 ? kUnknownLandmark : truth, {}});
+      }
       associator->associate(f, k, z);
+      for (const LandmarkMerge& m : associator->lastMerges()) out.merges.push_back({k, m});
+      const std::span<const ScanDecision> decisions = associator->lastScan();
+      for (std::size_t i = 0; i < decisions.size() && first + i < out.associations.size(); ++i) {
+        out.associations[first + i].decision = decisions[i];
+      }
     };
   }
   std::size_t consumed = options.start_step;  // the stream's steps behind the filter

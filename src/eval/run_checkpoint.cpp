@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 
 namespace seif {
@@ -49,6 +50,9 @@ void CheckpointWriter::save(const SlamFilter& filter, std::size_t steps) const {
   extras.values = policy_.values;
   extras.values[std::string(kRunOutputKey)] = encodeRunOutput(out_);
   if (associator_) extras.values[std::string(kAssociatorKey)] = associator_->saveState();
+  if (associator_ && associator_->options().method != AssociationMethod::Known) {
+    extras.values[std::string(kRunAssociationsKey)] = encodeRunAssociations(out_);
+  }
   if (digest_) extras.values[std::string(kStepsDigestKey)] = std::to_string(digest_->value());
   saveCheckpoint(filter, policy_.path, extras);
 }
@@ -95,6 +99,66 @@ RunOutput decodeRunOutput(std::string_view bytes, const std::string& name) {
   return out;
 }
 
+std::string encodeRunAssociations(const RunOutput& out) {
+  ArchiveWriter w;
+  w.section("run-associations");
+  w.count(out.associations.size());
+  for (const AssociationRecord& a : out.associations) {
+    w.u64(a.step);
+    w.u64(a.index);
+    w.fixed(a.z);
+    w.i64(a.truth);
+    const ScanDecision& d = a.decision;
+    w.u64(static_cast<std::uint64_t>(d.outcome) | (d.provisional ? 4u : 0u) | (d.applied ? 8u : 0u));
+    w.i64(d.landmark);
+    w.f64(d.d2);
+  }
+  w.count(out.merges.size());
+  for (const MergeRecord& m : out.merges) {
+    w.u64(m.step);
+    w.i64(m.merge.kept);
+    w.i64(m.merge.merged);
+  }
+  return w.bytes();
+}
+
+void decodeRunAssociations(std::string_view bytes, const std::string& name, RunOutput& out) {
+  ArchiveReader r(bytes, name);
+  r.section("run-associations");
+  constexpr std::int64_t kIdMax = std::numeric_limits<int>::max();
+  out.associations.resize(r.count("association records", 8 * 9));
+  for (std::size_t i = 0; i < out.associations.size(); ++i) {
+    AssociationRecord& a = out.associations[i];
+    a.step = static_cast<std::size_t>(r.u64("association step"));
+    a.index = static_cast<std::size_t>(r.u64("association index"));
+    if (a.step >= out.steps || (i > 0 && a.step < out.associations[i - 1].step)) {
+      r.fail("association record " + std::to_string(i) + ": step " + std::to_string(a.step) +
+             " is out of order or beyond the run's " + std::to_string(out.steps) + " steps");
+    }
+    r.fixed("measurement", a.z, true);
+    a.truth = static_cast<int>(r.i64In("truth id", kUnknownLandmark, kIdMax));
+    ScanDecision& d = a.decision;
+    const std::uint64_t flags = r.u64Max("decision", 15);
+    if ((flags & 3u) > 2u) r.fail("association record " + std::to_string(i) + ": no such outcome");
+    d.outcome = static_cast<ScanDecision::Outcome>(flags & 3u);
+    d.provisional = (flags & 4u) != 0;
+    d.applied = (flags & 8u) != 0;
+    d.landmark = static_cast<int>(r.i64In("landmark id", kUnknownLandmark, kIdMax));
+    if ((d.landmark == kUnknownLandmark) != (d.outcome == ScanDecision::Outcome::Ambiguous)) {
+      r.fail("association record " + std::to_string(i) + ": its landmark does not match its outcome");
+    }
+    d.d2 = r.f64("d2");
+    if (!(d.d2 >= 0.0)) r.fail("association record " + std::to_string(i) + ": d2 is not a distance");
+  }
+  out.merges.resize(r.count("merges", 3 * 9));
+  for (MergeRecord& m : out.merges) {
+    m.step = static_cast<std::size_t>(r.u64Max("merge step", out.steps));
+    m.merge.kept = static_cast<int>(r.i64In("kept landmark", 0, kIdMax));
+    m.merge.merged = static_cast<int>(r.i64In("merged landmark", 0, kIdMax));
+  }
+  r.finish();
+}
+
 RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::size_t steps,
                         const std::string& checkpoint) {
   const auto it = values.find(std::string(kRunOutputKey));
@@ -109,6 +173,11 @@ RunResume runResumeFrom(const std::map<std::string, std::string>& values, std::s
                                        std::to_string(steps));
   }
   if (const auto a = values.find(std::string(kAssociatorKey)); a != values.end()) resume.associator = a->second;
+  if (const auto a = values.find(std::string(kRunAssociationsKey)); a != values.end()) {
+    decodeRunAssociations(a->second, checkpoint, resume.output);
+  } else if (!resume.associator.empty()) {
+    resume.output.associations_from = steps;  // written before runs recorded them
+  }
   // Checkpoints from before the digest carry none: their data is not checked.
   if (const auto d = values.find(std::string(kStepsDigestKey)); d != values.end()) {
     std::uint64_t v = 0;

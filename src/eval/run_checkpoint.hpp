@@ -37,4 +37,10 @@ std::string encodeRunOutput(const RunOutput& out);
 /// Throws DataError naming `name` for bytes encodeRunOutput() did not write.
 RunOutput decodeRunOutput(std::string_view bytes, const std::string& name);
 
+/// RunOutput::associations and merges (kRunAssociationsKey).
+std::string encodeRunAssociations(const RunOutput& out);
+/// Into `out`, whose `steps` they must lie within. Throws DataError naming `name` for bytes
+/// encodeRunAssociations() did not write.
+void decodeRunAssociations(std::string_view bytes, const std::string& name, RunOutput& out);
+
 }  // namespace seif

@@ -108,8 +108,14 @@ std::string runSummary(const RunRequest& request, const RunReport& r, const std:
     appendf(text, "  rejected %zu gross outlier observation%s (beyond %g sigma of the measurement noise)\n",
                   out.rejected_observations, out.rejected_observations == 1 ? "" : "s", request.outlier_gate);
   }
-  appendf(text, "  wrote %s/{trajectory.tum,dead_reckoning.tum,map.csv,metrics.json%s}\n", out_dir.string().c_str(),
-                r.filter_errors ? ",trajectory_filter.tum,map_filter.csv" : "");
+  const bool associating = request.association.method != AssociationMethod::Known;
+  const bool recorded = associating && out.associations_from == 0;
+  appendf(text, "  wrote %s/{trajectory.tum,dead_reckoning.tum,map.csv,metrics.json%s%s}\n", out_dir.string().c_str(),
+                r.filter_errors ? ",trajectory_filter.tum,map_filter.csv" : "", recorded ? ",associations.csv" : "");
+  if (associating && !recorded) {
+    appendf(text, "  no associations.csv: the checkpoint resumed (at step %zu) was written before runs recorded "
+                  "their associations\n", out.associations_from);
+  }
   return text;
 }
 

@@ -207,6 +207,13 @@ struct ScanDecision {
 
 std::string_view scanOutcomeName(ScanDecision::Outcome o);  ///< "matched" | "new" | "ambiguous"
 
+/// Two landmarks the correspondence test found to be one (Associator::lastMerges()):
+/// `merged` went into `kept` (SlamFilter::mergeLandmarks), its observations with it.
+struct LandmarkMerge {
+  int kept = kUnknownLandmark;
+  int merged = kUnknownLandmark;
+};
+
 /// The correspondence test (IJRR 2004 §4; Probabilistic Robotics §12.7): the squared
 /// Mahalanobis distance of Delta = y_a - y_b, Sigma_Delta = F_Delta Sigma F_Delta^T over the
 /// joint marginal of landmarks a and b (SlamFilter::marginal with `mode`). Small: they may be
@@ -247,6 +254,9 @@ class Associator {
   /// Empty with known association, after a step without observations, and in an associator
   /// just restored (it is not part of saveState()).
   std::span<const ScanDecision> lastScan() const;
+  /// The merges the last associate() made before associating its scan, in the order made
+  /// (a landmark merged may have been kept by an earlier one). Empty as lastScan() is.
+  std::span<const LandmarkMerge> lastMerges() const;
   /// Landmark `id`'s label: the truth id most of its observations carried (kUnknownLandmark
   /// when none had one): to score a map against ground truth.
   int truthOf(int id) const;

@@ -23,6 +23,22 @@
 
 namespace seif {
 
+/// One observation of a run with unknown association and what the associator made of it
+/// (Associator::lastScan()): a row of `seif run`'s associations.csv.
+struct AssociationRecord {
+  std::size_t step = 0;   ///< the step whose update it was offered to (0-based)
+  std::size_t index = 0;  ///< its place among that step's observations, as the data gave them
+  Vec2 z = Vec2::Zero();  ///< the measurement
+  int truth = kUnknownLandmark;  ///< the data's id, hidden from the filter: for scoring only
+  ScanDecision decision;
+};
+
+/// A merge of two landmarks (Associator::lastMerges()) and the step whose association made it.
+struct MergeRecord {
+  std::size_t step = 0;
+  LandmarkMerge merge;
+};
+
 struct RunOutput {
   std::size_t steps = 0;
   std::vector<TimedPose> trajectory;  ///< the start pose, then the pose after every step
@@ -53,7 +69,42 @@ struct RunOutput {
   std::vector<TimedPose> groundtruth;
   std::vector<GpsFix> gps;
   std::map<std::string, std::size_t> dropped;  ///< by the source and the assembler, by reason
+  // Streamed runs with an associator that is not `known`: every observation offered to it,
+  // in order, and every merge it made. O(observations).
+  std::vector<AssociationRecord> associations;
+  std::vector<MergeRecord> merges;
+  /// The first step `associations` covers: 0, except in a run resumed from a checkpoint
+  /// written before runs recorded them (then the step it resumed at).
+  std::size_t associations_from = 0;
 };
+
+/// Where landmark `id` ended up after `merges` (each `merged` into its `kept`, in order):
+/// the landmark that holds its observations now, `id` itself when it was never merged.
+int mergedInto(int id, const std::vector<MergeRecord>& merges);
+
+/// A recorded observation's verdict against the truth, as AssociationCounts scores it.
+enum class AssociationVerdict {
+  Unscored,   ///< dropped, without a truth id, or in a landmark that is not in the map at the end
+  Correct,    ///< in the landmark labelled with its truth, which is not a duplicate
+  Wrong,      ///< in a landmark labelled with another truth (or with none)
+  Duplicate,  ///< in a landmark labelled with its truth, but a younger copy (scored wrong)
+};
+std::string_view associationVerdictName(AssociationVerdict v);  ///< "" | "correct" | "wrong" | "duplicate"
+
+/// Each of `out.associations`' verdicts, once the run is over and `associator.finish()` has
+/// labelled the map in `filter`: their sum over Correct is AssociationCounts::correct, over
+/// Wrong and Duplicate AssociationCounts::wrong. `final_landmark` receives each one's landmark
+/// at the end (kUnknownLandmark when dropped or removed).
+std::vector<AssociationVerdict> associationVerdicts(const RunOutput& out, const SlamFilter& filter,
+                                                    const Associator& associator,
+                                                    std::vector<int>* final_landmark = nullptr);
+
+/// associations.csv: header "step,time,index,z0,z1,truth,outcome,landmark,d2,provisional,applied,
+/// final_landmark,label,verdict", one row per recorded observation (z0, z1: range [m] and
+/// bearing [rad] for the range-bearing sensor; truth, landmark, final_landmark and label empty
+/// when none; d2 "inf" when no landmark was in reach). Written atomically.
+void writeAssociationsCsv(const std::filesystem::path& file, const RunOutput& out, const SlamFilter& filter,
+                          const Associator& associator);
 
 /// Checkpoints of a streamed run (`seif run --checkpoint-every N --checkpoint FILE`): after
 /// every `every` steps the filter and the run so far are saved to `path` (atomically, the
@@ -64,6 +115,9 @@ struct RunOutput {
 inline constexpr std::string_view kRunOutputKey = "run-output";
 /// The extras key of the digest of the steps a run's checkpoint consumed (StepDigest, decimal).
 inline constexpr std::string_view kStepsDigestKey = "steps-digest";
+/// The extras key of a run's association records so far (RunOutput::associations and
+/// merges; binary), in the checkpoints of runs with an associator that is not `known`.
+inline constexpr std::string_view kRunAssociationsKey = "run-associations";
 
 struct RunCheckpointing {
   std::size_t every = 0;  ///< 0: never periodically (only where a stopped run stops)
