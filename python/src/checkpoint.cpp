@@ -9,12 +9,12 @@ namespace seif::python {
 
 namespace {
 
-/// The extras' values: bytes for the binary ones a run writes (its outputs, its associator),
+/// The extras' values: bytes for the binary ones a run writes (its outputs, its associator, its association records),
 /// whatever their content; str for others that are UTF-8 text, bytes for the rest.
 py::dict valuesToPython(const std::map<std::string, std::string>& values) {
   py::dict out;
   for (const auto& [key, value] : values) {
-    if (key == kRunOutputKey || key == kAssociatorKey) {
+    if (key == kRunOutputKey || key == kAssociatorKey || key == kRunAssociationsKey) {
       out[py::str(key)] = py::bytes(value);
       continue;
     }
