@@ -9,14 +9,12 @@ counts them), the ceiling itself (the true map seen from the Vicon pose, by like
 individually), the landmarks at the end (duplicates; the dataset has 15) and the aligned
 trajectory error (ATE) beside known association's and dead reckoning's.
 
-A second table sorts the wrong ones. Each run is repeated through the Python API with the
-associator's hook recording every observation's landmark. An observation in a landmark at
-the end whose label (the truth id most of its observations carry) is not its own pairs it
-with another landmark: of its cluster (the true landmarks within --cluster metres of its
-own) or of another. One whose label is its own but whose landmark is a duplicate (an older
-landmark carries that label) is in a second copy. Observations recorded in a landmark later
-removed, or merged into another, are left out (the scoring counts the merged ones in the
-landmark kept), so the "wrong" column can be a little under metrics.json's `wrong`.
+A second table sorts the wrong ones, from each run's associations.csv (every observation's
+landmark at the end, merges followed, and its verdict). An observation in a landmark whose
+label (the truth id most of its observations carry) is not its own pairs it with another
+landmark: of its cluster (the true landmarks within --cluster metres of its own) or of
+another. One whose label is its own but whose landmark is a duplicate (an older landmark
+carries that label) is in a second copy. The "wrong" column is metrics.json's `wrong`.
 
 Run:  PYTHONPATH=build/python /usr/bin/python3 scripts/figures/association_mrclam.py
       [--dataset ../shared/data/mrclam/MRCLAM_Dataset6] [--robots 1,2,3,4,5]
@@ -24,6 +22,7 @@ Run:  PYTHONPATH=build/python /usr/bin/python3 scripts/figures/association_mrcla
       [--cluster 0.35] [--out out/association-mrclam]
 """
 import argparse
+import csv
 import os
 import sys
 
@@ -33,43 +32,17 @@ from association_study import metrics, run_all  # the sibling study's CLI helper
 METHODS = ["known", "nn", "jcbb"]
 
 
-def wrong_kinds(dataset, robot, spec, method, gate, cluster):
-    """The run's wrong associations by kind: {"cluster": n, "other": n, "copy": n}."""
-    options = seif.DatasetOptions()
-    options.robot = robot
-    source = seif.open_dataset(dataset, options=options)
-    info = source.info
-    slam = seif.make_filter(spec, info.start_pose, info.filter_config())
-    a = seif.AssociationOptions()
-    a.method = method
-    if not spec.startswith("ekf"):  # as the CLI's runs above
-        a.marginal = seif.MarginalMode.__members__[gate.capitalize()]
-    associator = seif.Associator(a)
-    pairs = []
-
-    def associate(filter, step, k, observations):
-        kept = associator.associate(filter, k, observations)
-        pairs.extend((z.truth, z.landmark) for z in kept)
-        return kept
-
-    seif.run_loop(slam, source, associate=associate)
-    associator.finish(slam)
-    truth = info.landmarks  # id -> position
-    keeper = {}  # label -> the oldest landmark carrying it
-    for lid in sorted(slam.landmark_ids()):
-        keeper.setdefault(associator.truth_of(lid), lid)
+def wrong_kinds(run_dir, truth, cluster):
+    """The run's wrong associations by kind, from its associations.csv: {"cluster": n, "other": n, "copy": n}."""
     kinds = {"cluster": 0, "other": 0, "copy": 0}
-    final = set(slam.landmark_ids())
-    for t, lid in pairs:
-        if lid not in final or t not in truth:
-            continue
-        label = associator.truth_of(lid)
-        if label == t:
-            kinds["copy"] += keeper[label] != lid
-        elif label in truth and ((truth[label] - truth[t]) ** 2).sum() ** 0.5 <= cluster:
-            kinds["cluster"] += 1
-        else:
-            kinds["other"] += 1
+    with open(os.path.join(run_dir, "associations.csv"), newline="") as f:
+        for row in csv.DictReader(f):
+            if row["verdict"] == "duplicate":
+                kinds["copy"] += 1
+            elif row["verdict"] == "wrong":
+                t, label = int(row["truth"]), int(row["label"]) if row["label"] else None
+                near = label in truth and ((truth[label] - truth[t]) ** 2).sum() ** 0.5 <= cluster
+                kinds["cluster" if near else "other"] += 1
     return kinds
 
 
@@ -116,12 +89,13 @@ def main():
                       f"| {known['ate_rmse']:.3f} | {x['dead_reckoning_ate_rmse']:.3f} |")
 
     print()
+    truth = seif.open_dataset(a.dataset).info.landmarks  # id -> surveyed position
     print("| filter | association | robot | wrong | in a landmark of its cluster | of another cluster | in a second copy of its own |")
     print("|---|---|---:|---:|---:|---:|---:|")
     for f in filters:
         for m in METHODS[1:]:
             for r in robots:
-                k = wrong_kinds(a.dataset, r, f, m, a.gate, a.cluster)
+                k = wrong_kinds(jobs[(f, r, m)][0], truth, a.cluster)
                 n = sum(k.values())
                 share = {key: f"{100 * v / n:.1f} %" if n else "-" for key, v in k.items()}
                 print(f"| {f} | {m} | {r} | {n} | {share['cluster']} | {share['other']} | {share['copy']} |")
