@@ -669,6 +669,18 @@ AssociationCounts parkWithClutter(const std::string& filter, AssociationMethod m
   loop.associate = [&](SlamFilter& filt, const Step&, std::size_t k, std::vector<Observation>& z) { a.associate(filt, k, z); };
   runLoop(*f, data, {}, loop);
   a.finish(*f);
+  // A duplicate is exactly a landmark whose label an older (smaller id) one holds.
+  std::vector<int> by_age = f->landmarkIds();
+  std::sort(by_age.begin(), by_age.end());
+  std::set<int> labels;
+  std::size_t duplicates = 0;
+  for (int id : by_age) {
+    const int label = a.truthOf(id);
+    const bool older_has_it = label >= 0 && !labels.insert(label).second;
+    EXPECT_EQ(a.isDuplicate(id), older_has_it) << "landmark " << id << ", label " << label;
+    duplicates += a.isDuplicate(id) ? 1 : 0;
+  }
+  EXPECT_EQ(duplicates, a.counts().duplicate_landmarks);
   std::map<int, Vec2> truth;
   for (int id : f->landmarkIds()) {
     if (const auto it = data.landmarks.find(a.truthOf(id)); it != data.landmarks.end()) truth[id] = it->second;

@@ -128,6 +128,7 @@ struct Associator::Impl {
   // counts those without one). The label of a landmark is its most frequent truth id.
   std::unordered_map<int, std::unordered_map<int, std::size_t>> seen_truths;
   std::unordered_map<int, int> label;  // set by finish()
+  std::unordered_set<int> duplicates;  // set by finish(): landmarks with an older one's label
   std::unordered_map<int, Provisional> provisional;
   std::vector<int> touched;  // landmarks to re-index at the next scan
   std::vector<ScanDecision> decisions;  // Associator::lastScan()
@@ -449,6 +450,7 @@ int Associator::truthOf(int id) const {
   const auto it = impl_->label.find(id);
   return it != impl_->label.end() ? it->second : impl_->majority(id);
 }
+bool Associator::isDuplicate(int id) const { return impl_->duplicates.count(id) != 0; }
 
 void Associator::associate(SlamFilter& filter, std::size_t /*k*/, std::vector<Observation>& observations) {
   Impl& s = *impl_;
@@ -717,6 +719,7 @@ void Associator::finish(SlamFilter& filter, const std::atomic<bool>* stop) {
   c.scored = c.correct = c.wrong = c.unlabelled = c.unlabelled_matched = 0;
   c.spurious_landmarks = c.duplicate_landmarks = 0;
   s.label.clear();
+  s.duplicates.clear();
   std::unordered_set<int> labelled;
   // The older landmark (the smaller id) keeps a shared label; the map's order is not the
   // landmarks' age once removals have moved slots.
@@ -727,7 +730,10 @@ void Associator::finish(SlamFilter& filter, const std::atomic<bool>* stop) {
     const bool duplicate = label >= 0 && !labelled.insert(label).second;
     s.label[id] = label;
     if (label < 0) ++c.spurious_landmarks;
-    if (duplicate) ++c.duplicate_landmarks;
+    if (duplicate) {
+      s.duplicates.insert(id);
+      ++c.duplicate_landmarks;
+    }
     const auto it = s.seen_truths.find(id);
     if (it == s.seen_truths.end()) continue;
     for (const auto& [truth, n] : it->second) {

@@ -50,14 +50,6 @@ std::unordered_map<int, int> finalLandmarks(const RunOutput& out, const SlamFilt
 std::vector<AssociationVerdict> associationVerdicts(const RunOutput& out, const SlamFilter& filter,
                                                     const Associator& associator, std::vector<int>* final_landmark) {
   const std::unordered_map<int, int> final = finalLandmarks(out, filter);
-  // A label's keeper is its oldest landmark (the smallest id), as Associator::finish() scores.
-  std::vector<int> by_age = filter.landmarkIds();
-  std::sort(by_age.begin(), by_age.end());
-  std::unordered_map<int, int> keeper;  // label -> landmark
-  for (int id : by_age) {
-    const int label = associator.truthOf(id);
-    if (label >= 0) keeper.emplace(label, id);
-  }
   std::vector<AssociationVerdict> verdicts(out.associations.size(), AssociationVerdict::Unscored);
   if (final_landmark) final_landmark->assign(out.associations.size(), kUnknownLandmark);
   for (std::size_t i = 0; i < out.associations.size(); ++i) {
@@ -70,7 +62,7 @@ std::vector<AssociationVerdict> associationVerdicts(const RunOutput& out, const 
     if (label != r.truth) {
       verdicts[i] = AssociationVerdict::Wrong;
     } else {
-      verdicts[i] = keeper.at(label) == at ? AssociationVerdict::Correct : AssociationVerdict::Duplicate;
+      verdicts[i] = associator.isDuplicate(at) ? AssociationVerdict::Duplicate : AssociationVerdict::Correct;
     }
   }
   return verdicts;

@@ -260,6 +260,9 @@ class Associator {
   /// Landmark `id`'s label: the truth id most of its observations carried (kUnknownLandmark
   /// when none had one): to score a map against ground truth.
   int truthOf(int id) const;
+  /// Whether landmark `id` shares its label with an older landmark (a smaller id) of the map
+  /// finish() scored: a duplicate, whose observations it counted wrong. False before finish().
+  bool isDuplicate(int id) const;
   const AssociationOptions& options() const;
 
   /// The associator's whole state - options, counts, index, provisional landmarks, the
