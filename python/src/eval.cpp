@@ -80,6 +80,23 @@ Eigen::MatrixXd poseArray(const std::vector<TimedPose>& poses) {
 }
 
 void bindRun(py::module_& m) {
+  py::class_<AssociationRecord>(m, "AssociationRecord",
+                                "One observation offered to the associator and its decision (a row of associations.csv)")
+      .def_readonly("step", &AssociationRecord::step, "the step whose update it was offered to (0-based)")
+      .def_readonly("index", &AssociationRecord::index, "its place among that step's observations")
+      .def_readonly("z", &AssociationRecord::z)
+      .def_readonly("truth", &AssociationRecord::truth, "the data's id, hidden from the filter (-1: none)")
+      .def_readonly("decision", &AssociationRecord::decision)
+      .def("__repr__", [](py::handle x) { return reprOf(x, {"step", "index", "truth", "decision"}); });
+  py::class_<MergeRecord>(m, "MergeRecord", "A merge of two landmarks and the step whose association made it")
+      .def_readonly("step", &MergeRecord::step)
+      .def_readonly("merge", &MergeRecord::merge)
+      .def("__repr__", [](py::handle x) { return reprOf(x, {"step", "merge"}); });
+  py::enum_<AssociationVerdict>(m, "AssociationVerdict", "A recorded observation's verdict against the truth")
+      .value("Unscored", AssociationVerdict::Unscored)
+      .value("Correct", AssociationVerdict::Correct)
+      .value("Wrong", AssociationVerdict::Wrong)
+      .value("Duplicate", AssociationVerdict::Duplicate);
   py::class_<RunOutput>(m, "RunOutput",
                         "What a run produced (eval/run.hpp). List attributes are copied on access; "
                         "trajectory_array() etc. give numpy arrays.")
@@ -100,6 +117,11 @@ void bindRun(py::module_& m) {
       .def_readonly("groundtruth", &RunOutput::groundtruth, py::return_value_policy::copy)
       .def_readonly("gps", &RunOutput::gps, py::return_value_policy::copy)
       .def_readonly("dropped", &RunOutput::dropped)
+      .def_readonly("associations", &RunOutput::associations, py::return_value_policy::copy,
+                    "with an associator that is not known: every observation offered to it (AssociationRecord)")
+      .def_readonly("merges", &RunOutput::merges, py::return_value_policy::copy, "every merge it made (MergeRecord)")
+      .def_readonly("associations_from", &RunOutput::associations_from,
+                    "the first step `associations` covers (0 but after a resume from an old checkpoint)")
       .def("trajectory_array", [](const RunOutput& o) { return poseArray(o.trajectory); }, "(n, 4): t, x, y, theta")
       .def("dead_reckoning_array", [](const RunOutput& o) { return poseArray(o.dead_reckoning); })
       .def("groundtruth_array", [](const RunOutput& o) { return poseArray(o.groundtruth); })
@@ -271,19 +293,38 @@ void bindRun(py::module_& m) {
       "Runs every step of an in-memory Dataset through `filter` (then finish()); progress(done, total).");
   m.def(
       "run_filter",
-      [](SlamFilter& filter, EventSource& source, const py::object& progress, bool pose_covariances) {
+      [](SlamFilter& filter, EventSource& source, const py::object& progress, bool pose_covariances,
+         Associator* associator) {
         const auto callback = pythonCallback<double>(progress);
         RunOutput out;
         {
           py::gil_scoped_release release;
-          out = runFilter(filter, source, callback, pose_covariances);
+          out = runFilter(filter, source, callback, pose_covariances, {}, nullptr, associator);
         }
         if (out.failure) std::rethrow_exception(out.failure);  // the filter holds the steps before it
         return out;
       },
       py::arg("filter"), py::arg("source"), py::arg("progress") = py::none(), py::arg("pose_covariances") = false,
+      py::arg("associator") = nullptr,
       "Streams an EventSource through `filter` (built with source.info's models); progress(fraction). "
-      "A failure raises its error; `filter` then holds the steps before it.");
+      "With `associator` the observations get their landmark ids from it (then its finish() runs) and the "
+      "output records them (associations, merges). A failure raises its error; `filter` then holds the steps "
+      "before it.");
+  m.def("merged_into", &mergedInto, py::arg("id"), py::arg("merges"),
+        "The landmark that holds landmark `id`'s observations after `merges`, `id` itself when never merged.");
+  m.def(
+      "association_verdicts",
+      [](const RunOutput& out, const SlamFilter& filter, const Associator& associator) {
+        std::vector<int> final_landmark;
+        std::vector<AssociationVerdict> verdicts = associationVerdicts(out, filter, associator, &final_landmark);
+        return py::make_tuple(verdicts, final_landmark);
+      },
+      py::arg("output"), py::arg("filter"), py::arg("associator"),
+      "After a run with `associator` (its finish() done): (each record's AssociationVerdict, each record's "
+      "landmark at the end, -1 when dropped or removed). Correct sums to its counts.correct, Wrong and "
+      "Duplicate to counts.wrong.");
+  m.def("write_associations_csv", &writeAssociationsCsv, py::arg("file"), py::arg("output"), py::arg("filter"),
+        py::arg("associator"), "associations.csv, as `seif run` writes it.");
 
   m.def("start_pose", &startPose, py::arg("dataset"), "Ground truth at the first step's time, else the origin.");
   m.def("dead_reckoning", &deadReckoning, py::arg("dataset"), py::arg("start"), py::arg("motion"),

@@ -529,6 +529,10 @@ void bindAssociation(py::module_& m) {
                     "Matched: the pairing's squared Mahalanobis distance; else to the nearest landmark (inf: none)")
       .def("__repr__",
            [](py::handle d) { return reprOf(d, {"outcome", "landmark", "provisional", "applied", "d2"}); });
+  py::class_<LandmarkMerge>(m, "LandmarkMerge", "Two landmarks found one (Associator.last_merges): `merged` into `kept`")
+      .def_readonly("kept", &LandmarkMerge::kept)
+      .def_readonly("merged", &LandmarkMerge::merged)
+      .def("__repr__", [](py::handle x) { return reprOf(x, {"kept", "merged"}); });
   py::class_<Associator>(m, "Associator",
                          "Gives observations their landmark ids before an update (run_loop's associate hook)")
       .def(py::init<const AssociationOptions&>(), py::arg("options"))
@@ -547,12 +551,19 @@ void bindAssociation(py::module_& m) {
            "After the run: removes the landmarks still provisional (a smoother keeps them) and scores the "
            "association")
       .def("truth_of", &Associator::truthOf, py::arg("id"))
+      .def("is_duplicate", &Associator::isDuplicate, py::arg("id"),
+           "After finish(): landmark `id` shares its label with an older landmark (a smaller id), and its "
+           "observations were counted wrong")
       .def_property_readonly("counts", &Associator::counts, py::return_value_policy::copy)
       .def_property_readonly(
           "last_scan",
           [](const Associator& a) { return std::vector<ScanDecision>(a.lastScan().begin(), a.lastScan().end()); },
           "What the last associate() decided, one ScanDecision per observation it was given, in their order "
           "(empty with known association and after a step without observations)")
+      .def_property_readonly(
+          "last_merges",
+          [](const Associator& a) { return std::vector<LandmarkMerge>(a.lastMerges().begin(), a.lastMerges().end()); },
+          "The merges the last associate() made before associating its scan, in the order made")
       .def_property_readonly("options", &Associator::options, py::return_value_policy::copy)
       .def(
           "state_bytes", [](const Associator& a) { return py::bytes(a.saveState()); },

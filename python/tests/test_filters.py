@@ -264,6 +264,49 @@ def test_association_from_python_equals_the_cpp_run(tmp_path, method, place):
     assert all(t >= 6 for t in truths), "every landmark labelled with a tree of the world"
 
 
+@pytest.mark.parametrize("seed, spec", [(1, "ekf"), (2, "seif")])  # seed 1 merges, seed 2 keeps a duplicate
+def test_a_streamed_run_records_every_association(tmp_path, seed, spec):
+    """run_filter with an associator: one record per observation offered, each merge, and
+    verdicts that add up to the associator's own score (as associations.csv does)."""
+    config = seif.preset_config("park", 0, 1500, seed)
+    config.clutter = 1.0
+    config.detection_probability = 0.9
+    source = seif.RobotLogSource(seif.simulate(config), config.noise)
+    options = seif.AssociationOptions()
+    options.method = seif.AssociationMethod.NearestNeighbour
+    if spec == "seif":
+        options.marginal = seif.MarginalMode.Local
+    associator = seif.Associator(options)
+    f = seif.make_filter(spec, source.info.start_pose, source.info.filter_config())
+    out = seif.run_filter(f, source, associator=associator)
+    counts = associator.counts
+    assert len(out.associations) == counts.observations > 1000
+    assert len(out.merges) == counts.merged
+    assert out.associations_from == 0
+    assert all(0 <= r.step < out.steps for r in out.associations)
+    news = sum(r.decision.outcome == seif.ScanDecision.Outcome.New for r in out.associations)
+    assert news == counts.new_landmarks
+    verdicts, final = seif.association_verdicts(out, f, associator)
+    assert len(verdicts) == len(final) == len(out.associations)
+    V = seif.AssociationVerdict
+    assert verdicts.count(V.Correct) == counts.correct > 0
+    assert verdicts.count(V.Wrong) + verdicts.count(V.Duplicate) == counts.wrong
+    ids = set(f.landmark_ids())
+    for r, v, at in zip(out.associations, verdicts, final):
+        if at != -1:
+            assert at in ids and at == seif.merged_into(r.decision.landmark, out.merges)
+        if v == V.Duplicate:
+            assert associator.is_duplicate(at) and associator.truth_of(at) == r.truth
+    assert sum(associator.is_duplicate(i) for i in ids) == counts.duplicate_landmarks
+    assert (counts.merged if seed == 1 else counts.duplicate_landmarks) > 0
+    moved = sum(at != r.decision.landmark for r, at in zip(out.associations, final) if at != -1)
+    assert (moved > 0) == (counts.merged > 0)
+    seif.write_associations_csv(tmp_path / "associations.csv", out, f, associator)
+    rows = (tmp_path / "associations.csv").read_text().splitlines()
+    assert rows[0].split(",")[-1] == "verdict" and len(rows) == 1 + len(out.associations)
+    assert sum(row.endswith(",correct") for row in rows) == counts.correct
+
+
 def test_a_discarded_scan_counts_nothing():
     """The filter refuses a scan's update and the caller goes on: discard_scan forgets the
     landmarks it started, and their ids are given again."""
