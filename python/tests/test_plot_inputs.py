@@ -27,6 +27,16 @@ def good_run(tmp_path_factory, source_dir):
     return root / "run"
 
 
+@pytest.fixture(scope="module")
+def associated_run(good_run, source_dir, tmp_path_factory):
+    """good_run's data run again with nn association: the folder holds associations.csv."""
+    cli = pathlib.Path(os.environ.get("SEIF_CLI") or source_dir / "build" / "bin" / "seif")
+    root = tmp_path_factory.mktemp("plot-nn")
+    run_cli(cli, "run", "--dataset", good_run.parent / "sim", "--association", "nn", "--out", root / "run")
+    shutil.copy(good_run / "gps.csv", root / "run" / "gps.csv")
+    return root / "run"
+
+
 def plot(source_dir, run_dir):
     """run_map.py called as `seif plot RUN_DIR` calls it."""
     script = source_dir / "scripts" / "figures" / "run_map.py"
@@ -72,6 +82,18 @@ CASES = {
 }
 
 
+# associations.csv, read when the folder has it: (corruption, line, quoted text)
+ASSOCIATION_CASES = {
+    "associations wrong header": (edit("associations.csv", 1, lambda t: "step,time"), 1, "step,time"),
+    "associations row of 13 fields": (edit("associations.csv", 3, lambda t: ",".join(t.split(",")[:13])), 3, None),
+    "associations unknown verdict": (edit("associations.csv", 3, field(13, "maybe", ",")), 3, "maybe"),
+    "associations time nan": (edit("associations.csv", 3, field(1, "nan", ",")), 3, "nan"),
+    "associations landmark not in the map": (edit("associations.csv", 3, field(11, "99999", ",")), 3, "99999"),
+    "associations landmark not a number": (edit("associations.csv", 3, field(11, "x", ",")), 3, "x"),
+    "associations verdict without a landmark": (edit("associations.csv", 3, field(11, "", ",")), 3, None),
+}
+
+
 def test_good_folder_is_drawn(good_run, source_dir, tmp_path):
     run_dir = pathlib.Path(shutil.copytree(good_run, tmp_path / "run"))
     done = plot(source_dir, run_dir)
@@ -88,6 +110,29 @@ def test_corrupt_input_is_one_line_and_exit_2(good_run, source_dir, tmp_path, ca
     assert done.returncode == 2, done.stdout + done.stderr
     assert len(done.stderr.splitlines()) == 1 and "Traceback" not in done.stderr, done.stderr
     assert done.stderr.startswith(f"run_map.py: {run_dir / name}:{line}: "), done.stderr
+    if found is not None:
+        assert done.stderr.rstrip().endswith(f"(found '{found}')"), done.stderr
+    assert not (run_dir / "map.png").exists()
+
+
+def test_a_folder_with_associations_is_drawn(associated_run, source_dir, tmp_path):
+    run_dir = pathlib.Path(shutil.copytree(associated_run, tmp_path / "run"))
+    rows = (run_dir / "associations.csv").read_text().splitlines()
+    assert len(rows) > 100 and any(r.endswith(",correct") for r in rows)
+    done = plot(source_dir, run_dir)
+    assert done.returncode == 0, done.stderr
+    assert (run_dir / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("case", ASSOCIATION_CASES)
+def test_corrupt_associations_are_one_line_and_exit_2(associated_run, source_dir, tmp_path, case):
+    corrupt, line, found = ASSOCIATION_CASES[case]
+    run_dir = pathlib.Path(shutil.copytree(associated_run, tmp_path / "run"))
+    corrupt(run_dir)
+    done = plot(source_dir, run_dir)
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert len(done.stderr.splitlines()) == 1 and "Traceback" not in done.stderr, done.stderr
+    assert done.stderr.startswith(f"run_map.py: {run_dir / 'associations.csv'}:{line}: "), done.stderr
     if found is not None:
         assert done.stderr.rstrip().endswith(f"(found '{found}')"), done.stderr
     assert not (run_dir / "map.png").exists()

@@ -6,6 +6,10 @@ Usage: /usr/bin/python3 scripts/figures/run_map.py OUT.png [--gps GPS] [--ellips
 
 Each RUN_DIR holds trajectory.tum, map.csv and (optionally) dead_reckoning.tum from `seif
 run`; `seif plot RUN_DIR` draws one with its gps.csv and ellipses into RUN_DIR/map.png.
+When RUN_DIR also holds associations.csv (a run with --association nn or jcbb), each
+observation the data's ids score wrong is drawn as a thin line from the pose it was made
+at to the landmark that holds it at the end, duplicate landmarks (the label of an older
+one) as squares and landmarks none of whose observations has an id as grey circles.
 --ellipses draws each landmark's 95 % covariance ellipse (map.csv's cov_xx, cov_xy, cov_yy).
 With --gps (time x y per line, '#' comments, or a CSV "time,x,y" such as `seif run`'s
 gps.csv), each trajectory and its map are moved by
@@ -13,7 +17,8 @@ the rigid 2-D motion that best aligns the trajectory, interpolated at the GPS st
 fixes (least squares, as metrics.json's gps_rmse); the first run's dead reckoning is drawn
 aligned the same way (its own best fit). Without --gps, everything is drawn as estimated.
 Each input is checked before drawing (fields per row, finite numbers, map.csv's header and
-positive semi-definite covariances, at least one pose); the first problem is printed as one
+positive semi-definite covariances, at least one pose, associations.csv's header, verdicts
+and landmarks in map.csv); the first problem is printed as one
 line `run_map.py: FILE:LINE: what is wrong (found 'TEXT')` and the script exits with status 2.
 Exits with status 3 when matplotlib is not installed.
 """
@@ -28,6 +33,7 @@ try:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
     from matplotlib.patches import Ellipse
 except ImportError:
     print("run_map.py: matplotlib is not installed", file=sys.stderr)
@@ -110,26 +116,108 @@ MAP_HEADERS = ["id,x,y", "id,x,y,cov_xx,cov_xy,cov_yy"]  # as src/io/results.cpp
 
 
 def read_map(path):
-    """Landmark positions (N x 2) and their 2x2 covariances (N x 2 x 2, or None without)."""
+    """Landmark ids (N), positions (N x 2) and 2x2 covariances (N x 2 x 2, or None without)."""
     lines = read_lines(path)
     header = check_header(path, lines, MAP_HEADERS)
     rows = read_rows(path, lines[1:], header.count(",") + 1, ",")
+    for (n, line), i in zip(lines[1:], rows[:, 0]):
+        if i != int(i):
+            fail(path, n, "landmark id not an integer", line.split(",")[0])
+    ids = rows[:, 0].astype(int)
     if header == MAP_HEADERS[0]:
-        return rows[:, 1:3], None
+        return ids, rows[:, 1:3], None
     for (n, line), (vxx, vxy, vyy) in zip(lines[1:], rows[:, 3:6]):
         # positive semi-definite, up to the 9 significant digits map.csv is written with
         if min(vxx, vyy) < 0:
             fail(path, n, f"negative variance {'cov_xx' if vxx < 0 else 'cov_yy'}", line)
         if abs(vxy) > math.sqrt(vxx * vyy) * (1 + 1e-6):
             fail(path, n, "covariance not positive semi-definite: |cov_xy| > sqrt(cov_xx cov_yy)", line)
-    return rows[:, 1:3], rows[:, [3, 4, 4, 5]].reshape(-1, 2, 2)
+    return ids, rows[:, 1:3], rows[:, [3, 4, 4, 5]].reshape(-1, 2, 2)
+
+
+# as src/eval/run_associations.cpp writes associations.csv
+ASSOCIATIONS_HEADER = "step,time,index,z0,z1,truth,outcome,landmark,d2,provisional,applied,final_landmark,label,verdict"
+VERDICTS = ("", "correct", "wrong", "duplicate")
+
+
+def read_associations(path, map_ids):
+    """From associations.csv: the wrong ones (time, landmark at the end), the duplicate
+    landmarks, the landmarks with a label, the scored count and the correct count."""
+    lines = read_lines(path)
+    check_header(path, lines, [ASSOCIATIONS_HEADER])
+    columns = ASSOCIATIONS_HEADER.split(",")
+    at = {c: k for k, c in enumerate(columns)}
+    known = set(int(i) for i in map_ids)
+    wrong, duplicates, labelled, scored, correct = [], set(), set(), 0, 0
+    for n, line in lines[1:]:
+        fields = line.split(",")
+        if len(fields) != len(columns):
+            fail(path, n, f"expected {len(columns)} fields, got {len(fields)}", line)
+        verdict = fields[at["verdict"]]
+        if verdict not in VERDICTS:
+            fail(path, n, "verdict not one of correct, wrong, duplicate or empty", verdict)
+        try:
+            time = float(fields[at["time"]])
+        except ValueError:
+            fail(path, n, "time not a number", fields[at["time"]])
+        if not math.isfinite(time):
+            fail(path, n, "time not a finite number", fields[at["time"]])
+        final = fields[at["final_landmark"]]
+        if not final:
+            if verdict:
+                fail(path, n, "a verdict for an observation in no landmark", line)
+            continue
+        try:
+            landmark = int(final)
+        except ValueError:
+            fail(path, n, "final_landmark not an integer", final)
+        if landmark not in known:
+            fail(path, n, "final_landmark is not in map.csv", final)
+        if fields[at["label"]]:
+            labelled.add(landmark)
+        if not verdict:
+            continue
+        scored += 1
+        correct += verdict == "correct"
+        if verdict == "duplicate":
+            duplicates.add(landmark)
+        if verdict != "correct":
+            wrong.append((time, landmark))
+    return wrong, duplicates, labelled, scored, correct
 
 
 def read_run(d, dead_reckoning):
-    """A run folder's trajectory, map, map covariances and (if asked and present) dead reckoning."""
-    traj, (lm, lm_cov) = read_tum(d / "trajectory.tum"), read_map(d / "map.csv")
-    dr_file = d / "dead_reckoning.tum"
-    return traj, lm, lm_cov, read_tum(dr_file) if dead_reckoning and dr_file.exists() else None
+    """A run folder's trajectory, map (ids, positions, covariances), (if asked and present)
+    dead reckoning, and (if present) its associations (read_associations)."""
+    traj, (ids, lm, lm_cov) = read_tum(d / "trajectory.tum"), read_map(d / "map.csv")
+    dr_file, assoc_file = d / "dead_reckoning.tum", d / "associations.csv"
+    dr = read_tum(dr_file) if dead_reckoning and dr_file.exists() else None
+    assoc = read_associations(assoc_file, ids) if assoc_file.exists() else None
+    return traj, ids, lm, lm_cov, dr, assoc
+
+
+def draw_associations(ax, traj, ids, m, xy_of, assoc, color):
+    """associations.csv over the map `m` (drawn positions of `ids`): each wrong observation
+    as a line from the pose at its time (`xy_of`) to its landmark; duplicates and landmarks
+    without a label marked."""
+    wrong, duplicates, labelled, scored, correct = assoc
+    where = {int(i): k for k, i in enumerate(ids)}
+    if wrong:
+        t = np.array([w[0] for w in wrong])
+        poses = xy_of(np.column_stack([np.interp(t, traj[:, 0], traj[:, 1]), np.interp(t, traj[:, 0], traj[:, 2])]))
+        ends = m[[where[w[1]] for w in wrong]]
+        segments = np.stack([poses, ends], axis=1)
+        ax.add_collection(LineCollection(segments, colors=color, linewidths=0.4, alpha=0.35, zorder=2))
+    share = f", {100.0 * correct / scored:.2f} % of {scored} right" if scored else ""
+    ax.plot([], [], "-", color=color, lw=0.4, alpha=0.6, label=f"wrong associations ({len(wrong)}{share})")
+    dup = m[[where[i] for i in sorted(duplicates)]].reshape(-1, 2)
+    ax.plot(dup[:, 0], dup[:, 1], "s", mfc="none", mec=color, ms=6, mew=0.8, zorder=5,
+            label=f"duplicate landmarks ({len(dup)})")
+    unlabelled = [k for k, i in enumerate(ids) if int(i) not in labelled]
+    if unlabelled:
+        u = m[unlabelled]
+        ax.plot(u[:, 0], u[:, 1], "o", mfc="none", mec="0.45", ms=5, mew=0.7, zorder=5,
+                label=f"landmarks without a labelled observation ({len(u)})")
 
 
 CHI2_95_2DOF = 5.991  # the 95 % quantile of chi-square with 2 degrees of freedom
@@ -196,7 +284,7 @@ def main(argv):
     fig, ax = plt.subplots(figsize=(9, 8))
     if gps is not None:
         ax.plot(gps[:, 1], gps[:, 2], ".", color="0.6", ms=2.5, label=f"GPS fixes ({len(gps)})", zorder=1)
-    for k, ((_, label), (traj, lm, lm_cov, dr)) in enumerate(zip(runs, inputs)):
+    for k, ((_, label), (traj, ids, lm, lm_cov, dr, assoc)) in enumerate(zip(runs, inputs)):
         R, t, note = np.eye(2), np.zeros(2), ""
         if gps is not None:
             R, t, rmse = aligned(traj, gps)
@@ -209,6 +297,8 @@ def main(argv):
         if ellipses and lm_cov is not None:
             draw_ellipses(ax, m, R @ lm_cov @ R.T, c)
             ax.plot([], [], "-", color=c, lw=0.5, label=f"{label} 95 % ellipses")
+        if assoc is not None:
+            draw_associations(ax, traj, ids, m, lambda p, R=R, t=t: p @ R.T + t, assoc, c)
         if dr is not None:
             Rd, td, note = np.eye(2), np.zeros(2), ""
             if gps is not None:
