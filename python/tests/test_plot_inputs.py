@@ -101,10 +101,9 @@ def test_good_folder_is_drawn(good_run, source_dir, tmp_path):
     assert (run_dir / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.mark.parametrize("case", CASES)
-def test_corrupt_input_is_one_line_and_exit_2(good_run, source_dir, tmp_path, case):
-    corrupt, name, line, found = CASES[case]
-    run_dir = pathlib.Path(shutil.copytree(good_run, tmp_path / "run"))
+def expect_one_line_error(source_dir, folder, tmp_path, corrupt, name, line, found):
+    """`folder` copied, corrupted, then drawn: one line naming `name`:`line`, status 2, no figure."""
+    run_dir = pathlib.Path(shutil.copytree(folder, tmp_path / "run"))
     corrupt(run_dir)
     done = plot(source_dir, run_dir)
     assert done.returncode == 2, done.stdout + done.stderr
@@ -113,6 +112,11 @@ def test_corrupt_input_is_one_line_and_exit_2(good_run, source_dir, tmp_path, ca
     if found is not None:
         assert done.stderr.rstrip().endswith(f"(found '{found}')"), done.stderr
     assert not (run_dir / "map.png").exists()
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_corrupt_input_is_one_line_and_exit_2(good_run, source_dir, tmp_path, case):
+    expect_one_line_error(source_dir, good_run, tmp_path, *CASES[case])
 
 
 def test_a_folder_with_associations_is_drawn(associated_run, source_dir, tmp_path):
@@ -127,12 +131,4 @@ def test_a_folder_with_associations_is_drawn(associated_run, source_dir, tmp_pat
 @pytest.mark.parametrize("case", ASSOCIATION_CASES)
 def test_corrupt_associations_are_one_line_and_exit_2(associated_run, source_dir, tmp_path, case):
     corrupt, line, found = ASSOCIATION_CASES[case]
-    run_dir = pathlib.Path(shutil.copytree(associated_run, tmp_path / "run"))
-    corrupt(run_dir)
-    done = plot(source_dir, run_dir)
-    assert done.returncode == 2, done.stdout + done.stderr
-    assert len(done.stderr.splitlines()) == 1 and "Traceback" not in done.stderr, done.stderr
-    assert done.stderr.startswith(f"run_map.py: {run_dir / 'associations.csv'}:{line}: "), done.stderr
-    if found is not None:
-        assert done.stderr.rstrip().endswith(f"(found '{found}')"), done.stderr
-    assert not (run_dir / "map.png").exists()
+    expect_one_line_error(source_dir, associated_run, tmp_path, corrupt, "associations.csv", line, found)
