@@ -46,6 +46,12 @@ TEST(PlotCli, DrawsARunFolderIntoMapPng) {
   ASSERT_EQ(runCli("simulate --preset paper --landmarks 20 --steps 150 --seed 2 --out " + (dir / "W").string()).status, 0);
   ASSERT_EQ(runCli("run --dataset " + (dir / "W").string() + " --filter ekf --out " + (dir / "R").string()).status, 0);
   EXPECT_FALSE(fs::exists(dir / "R" / "gps.csv"));  // the simulator has no GPS
+  // but ground truth: a pose per step after the start, and its 20 landmarks
+  const std::string truth = slurp(dir / "R" / "groundtruth.tum");
+  EXPECT_GE(std::count(truth.begin(), truth.end(), '\n'), 150);
+  const std::string landmarks = slurp(dir / "R" / "landmarks_groundtruth.csv");
+  EXPECT_EQ(landmarks.rfind("id,x,y\n", 0), 0u);
+  EXPECT_EQ(std::count(landmarks.begin(), landmarks.end(), '\n'), 21);
   const auto r = runCli("plot " + (dir / "R").string());
   EXPECT_EQ(r.status, 0) << r.out << r.err;
   expectDrawing(dir / "R" / "map.png");

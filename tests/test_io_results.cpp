@@ -106,6 +106,16 @@ TEST(AtomicFile, ACompleteWriteReplacesTheOldFile) {
   fs::remove_all(dir);
 }
 
+TEST(LandmarkTruthCsv, OneRowPerLandmarkByIdAtNineDigits) {
+  const fs::path dir = freshDir("truth");
+  writeLandmarkTruthCsv(dir / "landmarks_groundtruth.csv", {{7, Vec2(1.5, -2.25)}, {3, Vec2(0.123456789012, 4e-7)}});
+  std::ifstream in(dir / "landmarks_groundtruth.csv");
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), "id,x,y\n3,0.123456789,4e-07\n7,1.5,-2.25\n");
+  fs::remove_all(dir);
+}
+
 TEST(AtomicFile, UnwritableTargetsAreDataErrorsNamingThePath) {
   const fs::path dir = freshDir("bad");
   { std::ofstream(dir / "a_file") << "x"; }

@@ -29,7 +29,9 @@ namespace {
 
 
 void expectSameOutputs(const fs::path& a, const fs::path& b) {
-  for (const char* file : {"trajectory.tum", "dead_reckoning.tum", "map.csv"}) {
+  for (const char* file :
+       {"trajectory.tum", "dead_reckoning.tum", "map.csv", "groundtruth.tum", "landmarks_groundtruth.csv"}) {
+    EXPECT_TRUE(fs::exists(a / file) && fs::exists(b / file)) << file;  // simulated worlds: ground truth too
     EXPECT_EQ(slurp(a / file), slurp(b / file)) << file;
   }
   EXPECT_EQ(estimateMetrics(a), estimateMetrics(b));

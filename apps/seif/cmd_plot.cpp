@@ -1,5 +1,5 @@
 // seif plot: draws a `seif run` output folder (trajectory, map with 95 % covariance
-// ellipses, dead reckoning, GPS fixes and associations when the run stored them) into RUN_DIR/map.png with
+// ellipses, dead reckoning, GPS fixes, ground truth and associations when the run stored them) into RUN_DIR/map.png with
 // scripts/figures/run_map.py.
 #include "commands.hpp"
 #include "options.hpp"
@@ -45,7 +45,9 @@ void addPlotCommand(CLI::App& app) {
       "Draw the output folder of `seif run` into RUN_DIR/map.png: the trajectory, the map with\n"
       "each landmark's 95% covariance ellipse (when map.csv has covariances), the dead\n"
       "reckoning and, when the dataset had GPS (RUN_DIR/gps.csv), the fixes, with the\n"
-      "trajectory and map rigidly aligned to them. With RUN_DIR/associations.csv (--association nn\n"
+      "trajectory and map rigidly aligned to them; else, when the dataset had ground truth\n"
+      "(groundtruth.tum, landmarks_groundtruth.csv), the true path and landmarks, aligned to\n"
+      "them the same way. With RUN_DIR/associations.csv (--association nn\n"
       "or jcbb), each observation scored wrong is a line from its pose to its landmark, and the\n"
       "duplicate and unlabelled landmarks are marked. Rendered by scripts/figures/run_map.py with\n"
       "/usr/bin/python3 and matplotlib.");

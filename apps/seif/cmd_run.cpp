@@ -102,7 +102,8 @@ void addRunCommand(CLI::App& app) {
       "controls alone), OUT/map.csv (id,x,y and the 2x2\n"
       "covariance) and OUT/metrics.json (models and noise with their sources, timing, links,\n"
       "landmark RMSE and ATE against ground truth, GPS RMSE against GPS fixes, each when the\n"
-      "dataset has it, else null); OUT/gps.csv with GPS fixes; with --association nn or jcbb,\n"
+      "dataset has it, else null); OUT/gps.csv with GPS fixes, OUT/groundtruth.tum and\n"
+      "OUT/landmarks_groundtruth.csv with ground truth; with --association nn or jcbb,\n"
       "OUT/associations.csv (each observation's landmark and its verdict against the data's\n"
       "ids). Noise: a --sigma-* flag, else the file's, else the format's\n"
       "documented default; the console lists every value and where it came from.");

@@ -149,7 +149,8 @@ def plot_run(run_dir, title=None):
     """``seif plot``: draws the output folder of a run (``seif run`` or ``run_dataset``) into
     ``run_dir/map.png`` and returns its path: the trajectory, the map with each landmark's 95 %
     covariance ellipse, the dead reckoning and, when the run stored GPS (``gps.csv``), the
-    fixes with the trajectory and map rigidly aligned to them, and with ``associations.csv``
+    fixes with the trajectory and map rigidly aligned to them (else to the ground truth,
+    ``groundtruth.tum`` and ``landmarks_groundtruth.csv``, drawn too), and with ``associations.csv``
     each observation scored wrong, the duplicate and the unlabelled landmarks
     (``render_figure("run_map", ...)``). ``DataError`` when a file the figure needs is missing, ``RuntimeError`` when drawing fails."""
     import pathlib

@@ -79,6 +79,10 @@ CASES = {
     "gps nan": (edit("gps.csv", 3, field(2, "nan", ",")), "gps.csv", 3, "nan"),
     "gps not a number": (edit("gps.csv", 3, field(1, "abc", ",")), "gps.csv", 3, "abc"),
     "gps no fix": (replace("gps.csv", "time,x,y\n"), "gps.csv", 1, ""),
+    "ground truth nan": (edit("groundtruth.tum", 4, field(2, "nan")), "groundtruth.tum", 4, "nan"),
+    "ground truth empty": (replace("groundtruth.tum", ""), "groundtruth.tum", 1, ""),
+    "true landmarks wrong header": (edit("landmarks_groundtruth.csv", 1, lambda t: "id,x"), "landmarks_groundtruth.csv", 1, "id,x"),
+    "true landmark not a number": (edit("landmarks_groundtruth.csv", 3, field(2, "y", ",")), "landmarks_groundtruth.csv", 3, "y"),
 }
 
 
@@ -96,6 +100,7 @@ ASSOCIATION_CASES = {
 
 def test_good_folder_is_drawn(good_run, source_dir, tmp_path):
     run_dir = pathlib.Path(shutil.copytree(good_run, tmp_path / "run"))
+    assert (run_dir / "groundtruth.tum").is_file() and (run_dir / "landmarks_groundtruth.csv").is_file()
     done = plot(source_dir, run_dir)
     assert done.returncode == 0, done.stderr
     assert (run_dir / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -6,6 +6,10 @@ Usage: /usr/bin/python3 scripts/figures/run_map.py OUT.png [--gps GPS] [--ellips
 
 Each RUN_DIR holds trajectory.tum, map.csv and (optionally) dead_reckoning.tum from `seif
 run`; `seif plot RUN_DIR` draws one with its gps.csv and ellipses into RUN_DIR/map.png.
+When the first RUN_DIR holds the dataset's ground truth (groundtruth.tum,
+landmarks_groundtruth.csv: simulated worlds, MRCLAM), it is drawn, and without --gps each
+trajectory and map are aligned to it as to the GPS fixes (the legend's RMSE is at the ground
+truth's stamps, so it can differ a little from metrics.json's ate_rmse, taken at the run's).
 When RUN_DIR also holds associations.csv (a run with --association nn or jcbb), each
 observation the data's ids score wrong is drawn as a thin line from the pose it was made
 at to the landmark that holds it at the end, duplicate landmarks (the label of an older
@@ -186,6 +190,19 @@ def read_associations(path, map_ids):
     return wrong, duplicates, labelled, scored, correct
 
 
+def read_truth(d):
+    """The ground truth a run folder holds: poses (time, x, y) or None, landmarks (N x 2) or None."""
+    poses, landmarks = None, None
+    if (d / "groundtruth.tum").exists():
+        poses = read_tum(d / "groundtruth.tum")
+    if (d / "landmarks_groundtruth.csv").exists():
+        path = d / "landmarks_groundtruth.csv"
+        lines = read_lines(path)
+        check_header(path, lines, ["id,x,y"])
+        landmarks = read_rows(path, lines[1:], 3, ",")[:, 1:3]
+    return poses, landmarks
+
+
 def read_run(d, dead_reckoning):
     """A run folder's trajectory, map (ids, positions, covariances), (if asked and present)
     dead reckoning, and (if present) its associations (read_associations)."""
@@ -245,8 +262,11 @@ def rigid_fit(p, q):
 
 
 def aligned(traj, gps):
-    """The trajectory's (R, t) to the GPS frame, and the RMSE at the GPS stamps."""
+    """The trajectory's (R, t) to the frame of `gps` (time, x, y: GPS fixes or ground-truth
+    positions), and the RMSE at their stamps; (I, 0, None) when fewer than two lie inside it."""
     inside = (gps[:, 0] >= traj[0, 0]) & (gps[:, 0] <= traj[-1, 0])
+    if inside.sum() < 2:
+        return np.eye(2), np.zeros(2), None
     g = gps[inside]
     p = np.column_stack([np.interp(g[:, 0], traj[:, 0], traj[:, 1]), np.interp(g[:, 0], traj[:, 0], traj[:, 2])])
     R, t = rigid_fit(p, g[:, 1:3])
@@ -278,17 +298,24 @@ def main(argv):
     try:  # every input is read and checked before anything is drawn
         gps = read_gps(gps_file) if gps_file else None
         inputs = [read_run(d, k == 0) for k, (d, _) in enumerate(runs)]
+        truth, truth_landmarks = read_truth(runs[0][0]) if runs else (None, None)
     except InputError as e:
         print(f"run_map.py: {e}", file=sys.stderr)
         return 2
     fig, ax = plt.subplots(figsize=(9, 8))
     if gps is not None:
         ax.plot(gps[:, 1], gps[:, 2], ".", color="0.6", ms=2.5, label=f"GPS fixes ({len(gps)})", zorder=1)
+    if truth is not None:
+        ax.plot(truth[:, 1], truth[:, 2], "-", color="0.55", lw=1.6, alpha=0.7, label="ground truth", zorder=1)
+    if truth_landmarks is not None:
+        ax.plot(truth_landmarks[:, 0], truth_landmarks[:, 1], "o", color="0.2", ms=3.5,
+                label=f"true landmarks ({len(truth_landmarks)})", zorder=3)
+    reference, reference_name = (gps, "GPS") if gps is not None else (truth, "ATE")
     for k, ((_, label), (traj, ids, lm, lm_cov, dr, assoc)) in enumerate(zip(runs, inputs)):
         R, t, note = np.eye(2), np.zeros(2), ""
-        if gps is not None:
-            R, t, rmse = aligned(traj, gps)
-            note = f", GPS RMSE {rmse:.2f} m"
+        if reference is not None:
+            R, t, rmse = aligned(traj, reference)
+            note = f", {reference_name} RMSE {rmse:.2f} m" if rmse is not None else ""
         xy = traj[:, 1:3] @ R.T + t
         c = COLORS[k % len(COLORS)]
         ax.plot(xy[:, 0], xy[:, 1], "-", color=c, lw=0.9, label=f"{label} trajectory{note}", zorder=3)
@@ -301,13 +328,14 @@ def main(argv):
             draw_associations(ax, traj, ids, m, lambda p, R=R, t=t: p @ R.T + t, assoc, c)
         if dr is not None:
             Rd, td, note = np.eye(2), np.zeros(2), ""
-            if gps is not None:
-                Rd, td, rmse = aligned(dr, gps)
-                note = f", GPS RMSE {rmse:.1f} m"
+            if reference is not None:
+                Rd, td, rmse = aligned(dr, reference)
+                note = f", {reference_name} RMSE {rmse:.1f} m" if rmse is not None else ""
             dxy = dr[:, 1:3] @ Rd.T + td
             ax.plot(dxy[:, 0], dxy[:, 1], ":", color="0.3", lw=0.8, label=f"dead reckoning{note}", zorder=2)
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]" + (" (GPS frame)" if gps is not None else ""))
+    frame = " (GPS frame)" if gps is not None else " (ground-truth frame)" if truth is not None else ""
+    ax.set_xlabel("x [m]" + frame)
     ax.set_ylabel("y [m]")
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8)

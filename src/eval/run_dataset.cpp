@@ -81,7 +81,8 @@ std::string failureMessage(const std::exception_ptr& failure) {
 /// it were this run's (a failed run writes only what it ran; an option left out writes less).
 void removeEarlierOutputs(const std::filesystem::path& out) {
   for (const char* name : {"trajectory.tum", "dead_reckoning.tum", "map.csv", "metrics.json", "gps.csv",
-                           "trajectory_filter.tum", "map_filter.csv", "trajectory_cov.csv", "associations.csv", "map.png"}) {
+                           "trajectory_filter.tum", "map_filter.csv", "trajectory_cov.csv", "associations.csv", "groundtruth.tum",
+                           "landmarks_groundtruth.csv", "map.png"}) {
     std::filesystem::remove(out / name);
   }
 }
@@ -396,6 +397,8 @@ void finishReport(const RunRequest& request, const std::filesystem::path& out, c
     writeMapCsv(out / "map_filter.csv", *filtered, request.map_covariances);
   }
   if (!report.output.gps.empty()) writeGpsCsv(out / "gps.csv", report.output.gps);  // for `seif plot`
+  if (!report.output.groundtruth.empty()) writeTum(out / "groundtruth.tum", report.output.groundtruth);
+  if (!report.info.landmarks.empty()) writeLandmarkTruthCsv(out / "landmarks_groundtruth.csv", report.info.landmarks);
   // Each observation's association; not after a resume from a checkpoint that kept none.
   if (associating && report.output.associations_from == 0) {
     writeAssociationsCsv(out / "associations.csv", report.output, filter, associator);

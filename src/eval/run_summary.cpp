@@ -110,8 +110,15 @@ std::string runSummary(const RunRequest& request, const RunReport& r, const std:
   }
   const bool associating = request.association.method != AssociationMethod::Known;
   const bool recorded = associating && out.associations_from == 0;
-  appendf(text, "  wrote %s/{trajectory.tum,dead_reckoning.tum,map.csv,metrics.json%s%s}\n", out_dir.string().c_str(),
-                r.filter_errors ? ",trajectory_filter.tum,map_filter.csv" : "", recorded ? ",associations.csv" : "");
+  std::string extra;  // in the order run_dataset writes them
+  if (r.filter_errors) extra += ",trajectory_filter.tum,map_filter.csv";
+  if (!out.gps.empty()) extra += ",gps.csv";
+  if (!out.groundtruth.empty()) extra += ",groundtruth.tum";
+  if (!r.info.landmarks.empty()) extra += ",landmarks_groundtruth.csv";
+  if (recorded) extra += ",associations.csv";
+  if (request.trajectory_covariances) extra += ",trajectory_cov.csv";
+  appendf(text, "  wrote %s/{trajectory.tum,dead_reckoning.tum,map.csv,metrics.json%s}\n", out_dir.string().c_str(),
+                extra.c_str());
   if (associating && !recorded) {
     appendf(text, "  no associations.csv: the checkpoint resumed (at step %zu) was written before runs recorded "
                   "their associations\n", out.associations_from);

@@ -27,6 +27,13 @@ void writeGpsCsv(const std::filesystem::path& file, const std::vector<GpsFix>& f
   f.commit();
 }
 
+void writeLandmarkTruthCsv(const std::filesystem::path& file, const std::map<int, Vec2>& landmarks) {
+  AtomicFile f(file);
+  std::fprintf(f.get(), "id,x,y\n");
+  for (const auto& [id, p] : landmarks) std::fprintf(f.get(), "%d,%.9g,%.9g\n", id, p.x(), p.y());
+  f.commit();
+}
+
 void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vector<TimedPose>& trajectory,
                                const std::vector<Mat3>& covariances) {
   if (trajectory.size() != covariances.size()) {

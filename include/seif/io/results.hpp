@@ -1,11 +1,13 @@
 #pragma once
 // Result files of a run: trajectory.tum (TUM format, read by evo and most SLAM tools),
-// map.csv (id, x, y, and the 2x2 marginal covariance) and the dataset's GPS fixes (gps.csv). Both are written atomically
+// map.csv (id, x, y, and the 2x2 marginal covariance), the dataset's GPS fixes (gps.csv) and
+// ground-truth landmarks (landmarks_groundtruth.csv). Both are written atomically
 // (AtomicFile): complete, or absent.
 #include <seif/filters/slam_filter.hpp>
 #include <seif/core/dataset.hpp>
 
 #include <filesystem>
+#include <map>
 #include <vector>
 
 namespace seif {
@@ -21,6 +23,10 @@ void writeTrajectoryCovariance(const std::filesystem::path& file, const std::vec
 /// gps.csv: header "time,x,y", one row per GPS fix as the dataset gave it (metres, the
 /// dataset's local frame).
 void writeGpsCsv(const std::filesystem::path& file, const std::vector<GpsFix>& fixes);
+
+/// landmarks_groundtruth.csv: header "id,x,y", one row per ground-truth landmark by id (the
+/// dataset's ids and frame).
+void writeLandmarkTruthCsv(const std::filesystem::path& file, const std::map<int, Vec2>& landmarks);
 
 /// What writeMapCsv does with a landmark whose estimate (or covariance) is not finite.
 enum class NonFiniteRows {
