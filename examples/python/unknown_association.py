@@ -13,6 +13,10 @@ Symbols used below:
                                        the scoring does
   seif.association_ceiling(source, sensor)     what the true map seen from the true pose
                                        would associate right by likelihood: a reference
+  seif.run_filter(filter, source, associator=...)   the same run streamed: it records every
+                                       decision (RunOutput.associations) and merge
+  seif.association_verdicts(out, filter, associator)  each recorded observation's verdict
+                                       and its landmark at the end (seif run's associations.csv)
 
 Run:  PYTHONPATH=build/python /usr/bin/python3 examples/python/unknown_association.py [steps]
 """
@@ -55,3 +59,21 @@ print(f"ceiling: {100.0 * ceiling.individual / ceiling.observations:.2f} % indiv
       f"this run {100.0 * counts.correct / ceiling.observations:.2f} % of them")
 # "associated right" above counts the observations the run kept; "of them" counts every
 # labelled one, as the ceiling does (the difference: mostly those dropped as ambiguous).
+
+# --- 5. Each observation's fate: the same run streamed, every decision recorded. --------------
+# run_filter gives the associator each scan as run_loop did, calls its finish(), and keeps a
+# record per observation offered: the step, the measurement, its truth and the decision.
+slam = seif.make_filter("ekf", seif.start_pose(data), config)
+associator = seif.Associator(options)
+out = seif.run_filter(slam, seif.RobotLogSource(log, world.noise), associator=associator)
+verdicts, final = seif.association_verdicts(out, slam, associator)
+V = seif.AssociationVerdict
+print(f"recorded {len(out.associations)} observations: {verdicts.count(V.Correct)} correct, "
+      f"{verdicts.count(V.Wrong)} wrong, {verdicts.count(V.Duplicate)} in a duplicate landmark")
+wrong = [(r, at) for r, v, at in zip(out.associations, verdicts, final) if v == V.Wrong]
+for r, at in wrong[:5]:  # whose tree each was, and whose the landmark it went to is
+    # "new": it started the landmark (d2 to the nearest one), which more sightings of
+    # another tree then labelled; "matched": inside that landmark's accept gate.
+    how = r.decision.outcome.name.lower()
+    print(f"  step {r.step}: tree {r.truth} at range {r.z[0]:.1f} m, {how} (d2 {r.decision.d2:.2f}), "
+          f"is in landmark {at}, tree {associator.truth_of(at)}'s")

@@ -54,3 +54,11 @@ def test_unknown_association(source_dir, tmp_path):
     # On the park, clutter and misses included, nearest neighbour is close to the ceiling.
     assert float(ceiling.group(1)) > 98.5
     assert float(right.group(1)) > float(ceiling.group(1)) - 2.0
+    # The streamed run (run_filter with the associator) decides as the run loop's hook did.
+    first = re.search(r"(\d+) observations, (\d+) with a truth id kept: ([0-9.]+) %", out)
+    recorded = re.search(r"recorded (\d+) observations: (\d+) correct, (\d+) wrong, (\d+) in a duplicate", out)
+    assert first and recorded, out
+    assert recorded.group(1) == first.group(1)
+    correct, wrong, duplicate = (int(recorded.group(i)) for i in (2, 3, 4))
+    assert correct + wrong + duplicate == int(first.group(2))
+    assert abs(100.0 * correct / int(first.group(2)) - float(first.group(3))) < 0.006
