@@ -18,6 +18,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
+#include <cmath>
 #include <iostream>
 #include <map>
 #include <random>
@@ -77,6 +79,28 @@ TEST(Seif, WithoutSparsificationAndExactMeanItIsTheEif) {
     EXPECT_LT(worst_info, 1e-9) << "seed " << seed;
     EXPECT_LT(worst_b, 1e-9) << "seed " << seed;
   }
+}
+
+// The blanket query ranks links by strength, so the packed 2x2 form must order them exactly
+// as the general one: equal to the bit on random blocks and diagonals of any scale.
+TEST(LinkStrength, ThePackedFormEqualsTheGeneralOneToTheBit) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), e(-12.0, 12.0);
+  int differing_from_reciprocals = 0;
+  for (int k = 0; k < 20000; ++k) {
+    Mat2 H;
+    H << u(rng), u(rng), u(rng), u(rng);
+    H *= std::pow(10.0, e(rng));
+    const Vec2 da(std::pow(10.0, e(rng)), std::pow(10.0, e(rng)));
+    const Vec2 dc(std::pow(10.0, e(rng)), std::pow(10.0, e(rng)));
+    const double general = linkStrength(da, H, dc);
+    const double packed = linkStrength2(da, H.data(), dc);
+    ASSERT_EQ(std::memcmp(&general, &packed, sizeof(double)), 0) << "block " << k << ": " << general << " vs " << packed;
+    // A reformulation that is not the same arithmetic does differ: the check can tell.
+    const double reciprocal = H.cwiseAbs2().cwiseProduct(da.cwiseInverse() * dc.cwiseInverse().transpose()).sum();
+    if (reciprocal != general) ++differing_from_reciprocals;
+  }
+  EXPECT_GT(differing_from_reciprocals, 0);
 }
 
 TEST(Sparsification, ZeroesTheRobotLinksAndKeepsTheMeanOnRandomBlocks) {

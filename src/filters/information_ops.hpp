@@ -123,6 +123,17 @@ double linkStrength(const DiagA& da, const Block& H_ac, const DiagC& dc) {
   return s;
 }
 
+/// linkStrength of a 2x2 block between two landmarks, given column-major: its four
+/// quotients divided two at a time (one column per packed division) and summed in
+/// linkStrength's order, so the value is the same to the bit (IEEE division and products
+/// are correctly rounded whether packed or not). The division is most of a link's cost in
+/// a blanket query.
+inline double linkStrength2(const Vec2& da, const double* H_ac, const Vec2& dc) {
+  const Eigen::Array2d c0 = Eigen::Map<const Eigen::Array2d>(H_ac).square() / (da.array() * dc(0));
+  const Eigen::Array2d c1 = Eigen::Map<const Eigen::Array2d>(H_ac + 2).square() / (da.array() * dc(1));
+  return ((c0(0) + c1(0)) + c0(1)) + c1(1);  // (0,0), (0,1), (1,0), (1,1): row by row
+}
+
 /// The Local marginal (SlamFilter::marginal, MarginalMode::Local): the joint covariance of
 /// `vars` (-1 the robot, else landmark slots; in that order in the result) read off the
 /// inverse of H restricted to them and a blanket around them. `neighbours(v, out)` appends

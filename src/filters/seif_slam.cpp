@@ -495,7 +495,8 @@ Eigen::MatrixXd SeifSlam::localCovariance(std::span<const int> vars, bool conser
           const Mat32& H = store_.robotLinks()[static_cast<std::size_t>(node.active)].H;
           out.push_back({-1, linkStrength(dx, H, dl(v)), nullptr, 0});
         }
-        for (const SeifStore::Link& l : node.links) out.push_back({l.slot, linkStrength(dl(v), l.H, dl(l.slot)), l.H.data(), 2});
+        const Vec2 dv = dl(v);
+        for (const SeifStore::Link& l : node.links) out.push_back({l.slot, linkStrength2(dv, l.H.data(), dl(l.slot)), l.H.data(), 2});
       },
       [&](int v) -> Eigen::MatrixXd {
         if (v < 0) return store_.robotInformation();
