@@ -141,6 +141,10 @@ TEST(RunStop, AnAssociatingRunStoppedAndResumedEqualsTheWholeRun) {
     ASSERT_TRUE(fs::exists(whole / "associations.csv"));
     EXPECT_EQ(slurp(resumed / "associations.csv"), slurp(whole / "associations.csv"));
     EXPECT_EQ(rest.output.associations.size(), rest.association->observations);
+    // The request named no association; the summary lists the file the checkpoint's wrote.
+    const std::string summary = seif::runSummary(resume, rest, resumed);
+    EXPECT_NE(summary.find(",associations.csv"), std::string::npos) << summary;
+    EXPECT_EQ(summary.find("no associations.csv"), std::string::npos) << summary;
     EXPECT_GT(estimateMetrics(whole).at("association").at("correct").get<std::size_t>(), 0u);
   }
 }

@@ -108,7 +108,7 @@ std::string runSummary(const RunRequest& request, const RunReport& r, const std:
     appendf(text, "  rejected %zu gross outlier observation%s (beyond %g sigma of the measurement noise)\n",
                   out.rejected_observations, out.rejected_observations == 1 ? "" : "s", request.outlier_gate);
   }
-  const bool associating = request.association.method != AssociationMethod::Known;
+  const bool associating = r.association_options.method != AssociationMethod::Known;  // as run_dataset writes it
   const bool recorded = associating && out.associations_from == 0;
   std::string extra;  // in the order run_dataset writes them
   if (r.filter_errors) extra += ",trajectory_filter.tum,map_filter.csv";
