@@ -61,6 +61,26 @@ def replace(name, text):
     return lambda run_dir: (run_dir / name).write_text(text)
 
 
+def copy_field(name, line, source, i, sep):
+    """Field i of line `line` set to field i of line `source` (a repeated id)."""
+    def apply(run_dir):
+        lines = (run_dir / name).read_text().split("\n")
+        fields = lines[line - 1].split(sep)
+        fields[i] = lines[source - 1].split(sep)[i]
+        lines[line - 1] = sep.join(fields)
+        (run_dir / name).write_text("\n".join(lines))
+    return apply
+
+
+def raw_bytes(name, line, data):
+    """The first field of line `line` replaced by the bytes `data` (not text)."""
+    def apply(run_dir):
+        lines = (run_dir / name).read_bytes().split(b"\n")
+        lines[line - 1] = data + b" " + b" ".join(lines[line - 1].split(b" ")[1:])
+        (run_dir / name).write_bytes(b"\n".join(lines))
+    return apply
+
+
 # case: (corruption, file and line the message must name, the text it must quote)
 CASES = {
     "trajectory not a number": (edit("trajectory.tum", 5, field(1, "abc")), "trajectory.tum", 5, "abc"),
@@ -68,6 +88,8 @@ CASES = {
     "trajectory row of 2 fields": (edit("trajectory.tum", 5, lambda t: " ".join(t.split()[:2])), "trajectory.tum", 5, None),
     "trajectory row of 7 fields": (edit("trajectory.tum", 5, lambda t: " ".join(t.split()[:7])), "trajectory.tum", 5, None),
     "trajectory empty": (replace("trajectory.tum", ""), "trajectory.tum", 1, ""),
+    "trajectory time backwards": (copy_field("trajectory.tum", 5, 2, 0, " "), "trajectory.tum", 5, None),
+    "trajectory bytes not printable": (raw_bytes("trajectory.tum", 5, b"\x01\xff"), "trajectory.tum", 5, "\\x01\\xff"),
     "dead reckoning not a number": (edit("dead_reckoning.tum", 6, field(3, "abc")), "dead_reckoning.tum", 6, "abc"),
     "map coordinate nan": (edit("map.csv", 4, field(1, "nan", ",")), "map.csv", 4, "nan"),
     "map covariance nan": (edit("map.csv", 4, field(4, "nan", ",")), "map.csv", 4, "nan"),
@@ -76,11 +98,15 @@ CASES = {
     "map row of 5 fields": (edit("map.csv", 4, lambda t: ",".join(t.split(",")[:5])), "map.csv", 4, None),
     "map wrong header": (edit("map.csv", 1, lambda t: "foo,bar"), "map.csv", 1, "foo,bar"),
     "map empty": (replace("map.csv", ""), "map.csv", 1, ""),
+    "map id repeated": (copy_field("map.csv", 4, 2, 0, ","), "map.csv", 4, None),
     "gps nan": (edit("gps.csv", 3, field(2, "nan", ",")), "gps.csv", 3, "nan"),
     "gps not a number": (edit("gps.csv", 3, field(1, "abc", ",")), "gps.csv", 3, "abc"),
     "gps no fix": (replace("gps.csv", "time,x,y\n"), "gps.csv", 1, ""),
     "ground truth nan": (edit("groundtruth.tum", 4, field(2, "nan")), "groundtruth.tum", 4, "nan"),
     "ground truth empty": (replace("groundtruth.tum", ""), "groundtruth.tum", 1, ""),
+    "ground truth time backwards": (copy_field("groundtruth.tum", 5, 2, 0, " "), "groundtruth.tum", 5, None),
+    "true landmark id repeated": (copy_field("landmarks_groundtruth.csv", 4, 2, 0, ","), "landmarks_groundtruth.csv", 4, None),
+    "true landmark id not an integer": (edit("landmarks_groundtruth.csv", 3, field(0, "6.5", ",")), "landmarks_groundtruth.csv", 3, "6.5"),
     "true landmarks wrong header": (edit("landmarks_groundtruth.csv", 1, lambda t: "id,x"), "landmarks_groundtruth.csv", 1, "id,x"),
     "true landmark not a number": (edit("landmarks_groundtruth.csv", 3, field(2, "y", ",")), "landmarks_groundtruth.csv", 3, "y"),
 }
@@ -95,6 +121,8 @@ ASSOCIATION_CASES = {
     "associations landmark not in the map": (edit("associations.csv", 3, field(11, "99999", ",")), 3, "99999"),
     "associations landmark not a number": (edit("associations.csv", 3, field(11, "x", ",")), 3, "x"),
     "associations verdict without a landmark": (edit("associations.csv", 3, field(11, "", ",")), 3, None),
+    "associations time outside the trajectory": (edit("associations.csv", 3, field(1, "1e12", ",")), 3, "1e12"),
+    "associations label not an integer": (edit("associations.csv", 3, field(12, "abc", ",")), 3, "abc"),
 }
 
 
@@ -137,3 +165,42 @@ def test_a_folder_with_associations_is_drawn(associated_run, source_dir, tmp_pat
 def test_corrupt_associations_are_one_line_and_exit_2(associated_run, source_dir, tmp_path, case):
     corrupt, line, found = ASSOCIATION_CASES[case]
     expect_one_line_error(source_dir, associated_run, tmp_path, corrupt, "associations.csv", line, found)
+
+
+def first_scored(run_dir, verdict):
+    """The line number (from 1) and fields of associations.csv's first row with `verdict`."""
+    lines = (run_dir / "associations.csv").read_text().split("\n")
+    for n, line in enumerate(lines, 1):
+        if line.endswith("," + verdict):
+            return n, line.split(",")
+    pytest.fail(f"no row with the verdict {verdict}")
+
+
+@pytest.mark.parametrize("verdict,label", [("correct", ""), ("correct", "other"), ("wrong", "truth")])
+def test_a_verdict_the_label_contradicts_is_refused(associated_run, source_dir, tmp_path, verdict, label):
+    """A scored row's landmark has a label: equal to the truth when correct, else not."""
+    n, fields = first_scored(associated_run, verdict)
+    truth = fields[5]
+    value = {"": "", "other": str(int(truth) + 1000), "truth": truth}[label]
+    expect_one_line_error(source_dir, associated_run, tmp_path, edit("associations.csv", n, field(12, value, ",")),
+                          "associations.csv", n, None)
+
+
+@pytest.mark.parametrize("name", ["associations.csv", "groundtruth.tum", "landmarks_groundtruth.csv"])
+@pytest.mark.parametrize("link", ["loop", "dangling"])
+def test_a_broken_link_is_named_not_skipped(associated_run, source_dir, tmp_path, name, link):
+    """A symbolic-link loop or a dangling link in place of an optional file is an error."""
+    def corrupt(run_dir):
+        (run_dir / name).unlink()
+        os.symlink(name if link == "loop" else "nowhere", run_dir / name)
+    expect_one_line_error(source_dir, associated_run, tmp_path, corrupt, name, 0, None)
+
+
+def test_a_folder_with_associations_and_no_gps_is_aligned_to_the_ground_truth(associated_run, source_dir, tmp_path):
+    run_dir = pathlib.Path(shutil.copytree(associated_run, tmp_path / "run"))
+    (run_dir / "gps.csv").unlink()
+    script = source_dir / "scripts" / "figures" / "run_map.py"
+    done = subprocess.run([sys.executable, str(script), str(run_dir / "map.png"), str(run_dir)],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert (run_dir / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -20,13 +20,17 @@ gps.csv), each trajectory and its map are moved by
 the rigid 2-D motion that best aligns the trajectory, interpolated at the GPS stamps, to the
 fixes (least squares, as metrics.json's gps_rmse); the first run's dead reckoning is drawn
 aligned the same way (its own best fit). Without --gps, everything is drawn as estimated.
-Each input is checked before drawing (fields per row, finite numbers, map.csv's header and
-positive semi-definite covariances, at least one pose, associations.csv's header, verdicts
-and landmarks in map.csv); the first problem is printed as one
-line `run_map.py: FILE:LINE: what is wrong (found 'TEXT')` and the script exits with status 2.
+Each input is checked before drawing (fields per row, finite numbers, at least one pose and
+times that never go backwards, map.csv's header, unique integer ids and positive
+semi-definite covariances, associations.csv's header, times inside the trajectory, verdicts
+that agree with truth and label, landmarks in map.csv; an optional file that is a dangling
+or looping link is an error, not left out); the first problem is printed as one line
+`run_map.py: FILE:LINE: what is wrong (found 'TEXT')`, bytes that are not printable as \\xNN,
+and the script exits with status 2.
 Exits with status 3 when matplotlib is not installed.
 """
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -50,14 +54,28 @@ class InputError(Exception):
     """A corrupt input; its text is `FILE:LINE: what is wrong (found 'TEXT')`."""
 
 
+def printable(text):
+    """`text` with each byte that did not decode and each character that is not printable as \\xNN."""
+    out = []
+    for ch in str(text):
+        code = ord(ch)
+        if 0xDC80 <= code <= 0xDCFF:  # an undecodable byte (read_lines' surrogateescape)
+            out.append(f"\\x{code - 0xDC00:02x}")
+        elif not ch.isprintable():
+            out.append(f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}")
+        else:
+            out.append(ch)
+    return "".join(out)
+
+
 def fail(path, line, what, found):
-    raise InputError(f"{path}:{line}: {what} (found '{found}')")
+    raise InputError(f"{path}:{line}: {what} (found '{printable(found)}')")
 
 
 def read_lines(path, comments=False):
     """The non-blank lines of `path` as (line number, stripped text); '#' lines left out if `comments`."""
     try:
-        text = Path(path).read_text(errors="replace")
+        text = Path(path).read_text(errors="surrogateescape")
     except OSError as e:
         fail(path, 0, "cannot be read", e.strerror)
     lines = [(n, l.strip()) for n, l in enumerate(text.split("\n"), 1) if l.strip()]
@@ -97,10 +115,20 @@ def check_not_empty(path, rows, what):
         fail(path, 1, f"no {what} in the file", "")
 
 
+def check_time_order(path, lines, times):
+    """Times that never go backwards (the poses are interpolated in time)."""
+    for k in range(1, len(times)):
+        if times[k] < times[k - 1]:
+            fail(path, lines[k][0], f"time going backwards (after {times[k - 1]:.6f})", lines[k][1])
+
+
 def read_tum(path):
-    """(time, x, y) of each pose of a TUM file (`t x y z qx qy qz qw`, '#' comments); at least one."""
-    rows = read_rows(path, read_lines(path, comments=True), 8)
+    """(time, x, y) of each pose of a TUM file (`t x y z qx qy qz qw`, '#' comments); at least
+    one, in time order."""
+    lines = read_lines(path, comments=True)
+    rows = read_rows(path, lines, 8)
     check_not_empty(path, rows, "pose")
+    check_time_order(path, lines, rows[:, 0])
     return rows[:, :3]
 
 
@@ -116,6 +144,18 @@ def read_gps(path):
     return rows
 
 
+def check_ids(path, lines, values):
+    """Landmark ids (the first field of each of `lines`), each an integer, none repeated."""
+    seen = set()
+    for (n, line), i in zip(lines, values):
+        if i != int(i):
+            fail(path, n, "landmark id not an integer", line.split(",")[0])
+        if int(i) in seen:
+            fail(path, n, "landmark id repeated", line.split(",")[0])
+        seen.add(int(i))
+    return values.astype(int)
+
+
 MAP_HEADERS = ["id,x,y", "id,x,y,cov_xx,cov_xy,cov_yy"]  # as src/io/results.cpp writes map.csv
 
 
@@ -124,10 +164,7 @@ def read_map(path):
     lines = read_lines(path)
     header = check_header(path, lines, MAP_HEADERS)
     rows = read_rows(path, lines[1:], header.count(",") + 1, ",")
-    for (n, line), i in zip(lines[1:], rows[:, 0]):
-        if i != int(i):
-            fail(path, n, "landmark id not an integer", line.split(",")[0])
-    ids = rows[:, 0].astype(int)
+    ids = check_ids(path, lines[1:], rows[:, 0])
     if header == MAP_HEADERS[0]:
         return ids, rows[:, 1:3], None
     for (n, line), (vxx, vxy, vyy) in zip(lines[1:], rows[:, 3:6]):
@@ -144,9 +181,10 @@ ASSOCIATIONS_HEADER = "step,time,index,z0,z1,truth,outcome,landmark,d2,provision
 VERDICTS = ("", "correct", "wrong", "duplicate")
 
 
-def read_associations(path, map_ids):
+def read_associations(path, map_ids, span):
     """From associations.csv: the wrong ones (time, landmark at the end), the duplicate
-    landmarks, the landmarks with a label, the scored count and the correct count."""
+    landmarks, the landmarks with a label, the scored count and the correct count. Each time
+    lies in `span`, the trajectory's (first, last) stamp."""
     lines = read_lines(path)
     check_header(path, lines, [ASSOCIATIONS_HEADER])
     columns = ASSOCIATIONS_HEADER.split(",")
@@ -166,6 +204,11 @@ def read_associations(path, map_ids):
             fail(path, n, "time not a number", fields[at["time"]])
         if not math.isfinite(time):
             fail(path, n, "time not a finite number", fields[at["time"]])
+        if not span[0] <= time <= span[1]:
+            fail(path, n, f"time outside the trajectory's [{span[0]:.6f}, {span[1]:.6f}]", fields[at["time"]])
+        label = fields[at["label"]]
+        if label and not label.lstrip("-").isdigit():
+            fail(path, n, "label not an integer", label)
         final = fields[at["final_landmark"]]
         if not final:
             if verdict:
@@ -177,10 +220,15 @@ def read_associations(path, map_ids):
             fail(path, n, "final_landmark not an integer", final)
         if landmark not in known:
             fail(path, n, "final_landmark is not in map.csv", final)
-        if fields[at["label"]]:
+        if label:
             labelled.add(landmark)
         if not verdict:
             continue
+        # A scored observation has a truth id, so its landmark has a label; correct means equal.
+        if not label:
+            fail(path, n, f"verdict '{verdict}' for a landmark without a label", line)
+        if (verdict == "wrong") == (label == fields[at["truth"]]):
+            fail(path, n, f"verdict '{verdict}' where truth {'equals' if verdict == 'wrong' else 'differs from'} label", line)
         scored += 1
         correct += verdict == "correct"
         if verdict == "duplicate":
@@ -193,14 +241,21 @@ def read_associations(path, map_ids):
 def read_truth(d):
     """The ground truth a run folder holds: poses (time, x, y) or None, landmarks (N x 2) or None."""
     poses, landmarks = None, None
-    if (d / "groundtruth.tum").exists():
+    if present(d / "groundtruth.tum"):
         poses = read_tum(d / "groundtruth.tum")
-    if (d / "landmarks_groundtruth.csv").exists():
+    if present(d / "landmarks_groundtruth.csv"):
         path = d / "landmarks_groundtruth.csv"
         lines = read_lines(path)
         check_header(path, lines, ["id,x,y"])
-        landmarks = read_rows(path, lines[1:], 3, ",")[:, 1:3]
+        rows = read_rows(path, lines[1:], 3, ",")
+        check_ids(path, lines[1:], rows[:, 0])
+        landmarks = rows[:, 1:3]
     return poses, landmarks
+
+
+def present(path):
+    """Whether `path` is there at all: a dangling or looping link is, and reading it then fails."""
+    return os.path.lexists(path)
 
 
 def read_run(d, dead_reckoning):
@@ -208,8 +263,8 @@ def read_run(d, dead_reckoning):
     dead reckoning, and (if present) its associations (read_associations)."""
     traj, (ids, lm, lm_cov) = read_tum(d / "trajectory.tum"), read_map(d / "map.csv")
     dr_file, assoc_file = d / "dead_reckoning.tum", d / "associations.csv"
-    dr = read_tum(dr_file) if dead_reckoning and dr_file.exists() else None
-    assoc = read_associations(assoc_file, ids) if assoc_file.exists() else None
+    dr = read_tum(dr_file) if dead_reckoning and present(dr_file) else None
+    assoc = read_associations(assoc_file, ids, (traj[0, 0], traj[-1, 0])) if present(assoc_file) else None
     return traj, ids, lm, lm_cov, dr, assoc
 
 
