@@ -361,6 +361,13 @@ Eigen::MatrixXd localMarginalCovariance(std::span<const int> vars,
                          std::greater<>());
         offered.resize(room);
       }
+      // A queried member with `budget` links outside alone offers `budget` distinct variables
+      // at least as strong as its weakest kept one: a floor for the members after it (below).
+      if (order.size() == queried && offered.size() == budget) {
+        double weakest = offered.front().first;
+        for (const auto& o : offered) weakest = std::min(weakest, o.first);
+        floor = std::max(floor, weakest);
+      }
       for (const auto& o : offered) {
         frontier.push_back(o);
         std::push_heap(frontier.begin(), frontier.end());
